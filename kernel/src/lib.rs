@@ -1,2 +1,5 @@
 #![no_std]
 #![forbid(unsafe_code)]
+
+pub mod geometry;
+pub mod motion;
