@@ -8,7 +8,11 @@ use clap::{Parser, Subcommand};
 use error::CliError;
 
 #[derive(Parser)]
-#[command(name = "limb", version, about = "Control kernel for robots that move a person's arm")]
+#[command(
+    name = "limb",
+    version,
+    about = "Control kernel for robots that move a person's arm"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,

@@ -1,0 +1,265 @@
+//! The human arm as a planar two-link chain in frame S (`plant.md`; paper 000
+//! eq. 29-30 adapted to frame S).
+//!
+//! # Theory of operation
+//! q1 is the elevation of the upper arm about the shoulder, q2 the elbow
+//! flexion, psi = q1 + q2 the forearm elevation. With the shoulder at
+//! S = (sx, sz):
+//!
+//! ```text
+//! elbow  E = S + l1 (-cos q1, sin q1)
+//! grasp  G = E + l2 (-cos psi, sin psi)
+//! ```
+//!
+//! The robot measures the whole grasp pose (x, z, psi), so the pose-based
+//! inverse kinematics is unique: E = G + l2 (cos psi, -sin psi), then q1 from
+//! the direction S → E. The point-based inverse (grasp point only) has two
+//! branches (elbow above or below the shoulder–grasp line) and is singular at
+//! full extension and at the shoulder; both cases are explicit errors.
+
+use crate::geometry::{Point, Pose};
+
+/// Geometry of a person's arm in frame S.
+///
+/// # Invariants
+/// Only [`ArmGeometry::new`] constructs it: lengths finite and > 0, shoulder
+/// finite. Plausibility (anthropometric ranges) is the validator's job.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct ArmGeometry {
+    upper_arm_length: f64,
+    forearm_length: f64,
+    shoulder: Point,
+}
+
+/// Human joint angles [rad].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct JointAngles {
+    /// Upper-arm elevation above the horizontal, q1 [rad].
+    pub shoulder_elevation: f64,
+    /// Elbow flexion q2 [rad]; negative is hyperextension.
+    pub elbow_flexion: f64,
+}
+
+impl JointAngles {
+    /// Forearm elevation psi = q1 + q2 [rad].
+    pub fn forearm_elevation(self) -> f64 {
+        self.shoulder_elevation + self.elbow_flexion
+    }
+
+    /// True when both angles are finite.
+    pub fn is_finite(self) -> bool {
+        self.shoulder_elevation.is_finite() && self.elbow_flexion.is_finite()
+    }
+}
+
+/// Which elbow configuration the point-based inverse kinematics returns.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum ElbowBranch {
+    /// Elbow flexed (q2 ≥ 0): the physiological branch for a lifted arm.
+    Flexed,
+    /// Elbow hyperextended (q2 ≤ 0).
+    Hyperextended,
+}
+
+/// Why a kinematic computation has no answer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum KinematicsError {
+    /// An input was NaN or infinite.
+    NonFinite,
+    /// A length was zero or negative.
+    NonPositiveLength,
+    /// The grasp point is farther from the shoulder than l1 + l2, or nearer
+    /// than |l1 − l2|.
+    OutOfReach,
+    /// The grasp point coincides with the shoulder: the direction is undefined.
+    AtShoulder,
+}
+
+impl ArmGeometry {
+    /// An arm with upper-arm length l1 [m], forearm length l2 [m] and the
+    /// shoulder at `shoulder` (frame S).
+    pub fn new(
+        upper_arm_length: f64,
+        forearm_length: f64,
+        shoulder: Point,
+    ) -> Result<Self, KinematicsError> {
+        if !(upper_arm_length.is_finite() && forearm_length.is_finite() && shoulder.is_finite()) {
+            return Err(KinematicsError::NonFinite);
+        }
+        if upper_arm_length <= 0.0 || forearm_length <= 0.0 {
+            return Err(KinematicsError::NonPositiveLength);
+        }
+        Ok(Self {
+            upper_arm_length,
+            forearm_length,
+            shoulder,
+        })
+    }
+
+    /// Upper-arm length l1 [m].
+    pub fn upper_arm_length(&self) -> f64 {
+        self.upper_arm_length
+    }
+
+    /// Forearm length l2 (elbow to grasp point) [m].
+    pub fn forearm_length(&self) -> f64 {
+        self.forearm_length
+    }
+
+    /// Shoulder centre in frame S [m].
+    pub fn shoulder(&self) -> Point {
+        self.shoulder
+    }
+
+    /// Elbow position for joint angles `q` (paper eq. 30).
+    pub fn elbow(&self, q: JointAngles) -> Point {
+        let q1 = q.shoulder_elevation;
+        Point::new(
+            self.shoulder.x - self.upper_arm_length * libm::cos(q1),
+            self.shoulder.z + self.upper_arm_length * libm::sin(q1),
+        )
+    }
+
+    /// Grasp pose for joint angles `q` (forward kinematics).
+    pub fn forward(&self, q: JointAngles) -> Pose {
+        let elbow = self.elbow(q);
+        let psi = q.forearm_elevation();
+        Pose::new(
+            elbow.x - self.forearm_length * libm::cos(psi),
+            elbow.z + self.forearm_length * libm::sin(psi),
+            psi,
+        )
+    }
+
+    /// Elbow position implied by a measured grasp pose (paper eq. 19-21):
+    /// E = G + l2 (cos psi, −sin psi).
+    pub fn elbow_from_pose(&self, pose: Pose) -> Point {
+        Point::new(
+            pose.x + self.forearm_length * libm::cos(pose.psi),
+            pose.z - self.forearm_length * libm::sin(pose.psi),
+        )
+    }
+
+    /// Joint angles from a measured grasp pose (paper eq. 29 in frame S),
+    /// with the residual | |E − S| − l1 | [m] that says how well the pose fits
+    /// this arm. Unique: psi fixes the forearm direction.
+    pub fn inverse_from_pose(&self, pose: Pose) -> Result<(JointAngles, f64), KinematicsError> {
+        if !pose.is_finite() {
+            return Err(KinematicsError::NonFinite);
+        }
+        let elbow = self.elbow_from_pose(pose);
+        let dx = self.shoulder.x - elbow.x;
+        let dz = elbow.z - self.shoulder.z;
+        let reach = libm::hypot(dx, dz);
+        if reach <= f64::EPSILON * self.upper_arm_length {
+            return Err(KinematicsError::AtShoulder);
+        }
+        let q1 = libm::atan2(dz, dx);
+        let q = JointAngles {
+            shoulder_elevation: q1,
+            elbow_flexion: pose.psi - q1,
+        };
+        Ok((q, libm::fabs(reach - self.upper_arm_length)))
+    }
+
+    /// Joint angles placing the grasp point at `grasp`, on the chosen elbow
+    /// branch. Errors at the singular configurations instead of returning a
+    /// meaningless angle.
+    pub fn inverse_from_point(
+        &self,
+        grasp: Point,
+        branch: ElbowBranch,
+    ) -> Result<JointAngles, KinematicsError> {
+        if !grasp.is_finite() {
+            return Err(KinematicsError::NonFinite);
+        }
+        let (l1, l2) = (self.upper_arm_length, self.forearm_length);
+        // Vector shoulder → grasp, expressed with +x toward the person's hand.
+        let ux = self.shoulder.x - grasp.x;
+        let uz = grasp.z - self.shoulder.z;
+        let d = libm::hypot(ux, uz);
+        if d <= f64::EPSILON * (l1 + l2) {
+            return Err(KinematicsError::AtShoulder);
+        }
+        if d > l1 + l2 || d < libm::fabs(l1 - l2) {
+            return Err(KinematicsError::OutOfReach);
+        }
+        // Law of cosines for the elbow flexion, clamped only against rounding
+        // (d is already inside the reachable annulus).
+        let cos_q2 = ((d * d - l1 * l1 - l2 * l2) / (2.0 * l1 * l2)).clamp(-1.0, 1.0);
+        let q2_magnitude = libm::acos(cos_q2);
+        let q2 = match branch {
+            ElbowBranch::Flexed => q2_magnitude,
+            ElbowBranch::Hyperextended => -q2_magnitude,
+        };
+        let q1 = libm::atan2(uz, ux) - libm::atan2(l2 * libm::sin(q2), l1 + l2 * libm::cos(q2));
+        Ok(JointAngles {
+            shoulder_elevation: q1,
+            elbow_flexion: q2,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn arm(l1: f64, l2: f64) -> ArmGeometry {
+        ArmGeometry::new(l1, l2, Point::new(l1 + l2, 0.0)).unwrap()
+    }
+
+    #[test]
+    fn extended_arm_grasp_is_origin() {
+        let pose = arm(0.3, 0.2).forward(JointAngles::default());
+        assert!(pose.x.abs() < 1e-12 && pose.z.abs() < 1e-12 && pose.psi == 0.0);
+    }
+
+    #[test]
+    fn construction_rejects_bad_numbers() {
+        let s = Point::new(0.5, 0.0);
+        assert_eq!(
+            ArmGeometry::new(f64::NAN, 0.2, s),
+            Err(KinematicsError::NonFinite)
+        );
+        assert_eq!(
+            ArmGeometry::new(0.3, 0.0, s),
+            Err(KinematicsError::NonPositiveLength)
+        );
+        assert_eq!(
+            arm(0.3, 0.2).inverse_from_point(Point::new(2.0, 0.0), ElbowBranch::Flexed),
+            Err(KinematicsError::OutOfReach)
+        );
+        assert_eq!(
+            arm(0.3, 0.2).inverse_from_point(Point::new(0.5, 0.0), ElbowBranch::Flexed),
+            Err(KinematicsError::AtShoulder)
+        );
+    }
+
+    proptest! {
+        #[test]
+        fn pose_inverse_round_trips(l1 in 0.2..0.4f64, l2 in 0.15..0.3f64,
+                                    q1 in 0.0..1.5f64, q2 in -0.2..2.5f64) {
+            let arm = arm(l1, l2);
+            let q = JointAngles { shoulder_elevation: q1, elbow_flexion: q2 };
+            let (back, residual) = arm.inverse_from_pose(arm.forward(q)).unwrap();
+            prop_assert!(residual < 1e-9);
+            prop_assert!((back.shoulder_elevation - q1).abs() < 1e-9);
+            prop_assert!((back.elbow_flexion - q2).abs() < 1e-9);
+        }
+
+        #[test]
+        fn point_inverse_round_trips_on_its_branch(l1 in 0.2..0.4f64, l2 in 0.15..0.3f64,
+                                                    q1 in 0.0..1.5f64, q2 in 0.05..2.5f64) {
+            let arm = arm(l1, l2);
+            let q = JointAngles { shoulder_elevation: q1, elbow_flexion: q2 };
+            let back = arm.inverse_from_point(arm.forward(q).point(), ElbowBranch::Flexed).unwrap();
+            prop_assert!((back.shoulder_elevation - q1).abs() < 1e-6);
+            prop_assert!((back.elbow_flexion - q2).abs() < 1e-6);
+        }
+    }
+}
