@@ -1,9 +1,48 @@
+//! # limb-kernel
+//!
+//! A deterministic, `no_std`, heap-free, panic-free control kernel for a
+//! robot that holds a passive person's wrist, learns the arm, and only then
+//! moves it.
+//!
+//! Data flow of one [`Kernel::step`] (all frame S, SI units):
+//!
+//! ```text
+//! sensor frame ─▶ monitor::watchdog ─▶ monitor::rates ─▶ monitor::{force, speed,
+//!   (adapter)                                              workspace, joint_limits}
+//!                                                                 │ violation → SafeStop
+//!                                                                 ▼
+//!        state (Grasp │ Estimate │ Validated │ Manipulate │ SafeStop) ─▶ set-point
+//!          Estimate: path ─▶ estimation ─▶ validate ─▶ ValidatedArm   (motion)
+//!                                                                 ▼
+//!                                         impedance (saturated) ─▶ Command
+//! ```
+//!
+//! Modules: [`geometry`] (frame S quantities), [`arm`] (two-link kinematics),
+//! [`motion`] (minimum-jerk set-points, the estimation motion), [`path`]
+//! (the recorded grasp path), [`estimation`] (circle fits, Hough),
+//! [`validate`] (the only maker of [`validate::ValidatedArm`]), [`state`]
+//! (typed states and transitions), [`monitor`], [`impedance`], [`command`],
+//! [`trace`], [`config`], and [`kernel`] (the runtime wrapper).
+
 #![no_std]
 #![forbid(unsafe_code)]
 
 pub mod arm;
+pub mod command;
+pub mod config;
 pub mod estimation;
 pub mod geometry;
+pub mod impedance;
+pub mod kernel;
+pub mod monitor;
 pub mod motion;
 pub mod path;
+pub mod state;
+pub mod trace;
 pub mod validate;
+
+pub use command::{Command, CommandMode};
+pub use config::KernelConfig;
+pub use kernel::{Kernel, Refusal, RefusalReason, Request, State};
+pub use path::PathSample;
+pub use state::{StateKind, StopReason};

@@ -1,0 +1,122 @@
+//! Safety monitors: small pure checks with configured limits and a typed
+//! verdict.
+//!
+//! # Theory of operation
+//! Each monitor looks at one kind of hazard and returns `Ok(())` or a
+//! [`Violation`] naming the [`Limit`] crossed, the measured value and the
+//! bound, so the excess is known. The kernel runs the monitors that apply
+//! to its state on every step, before it computes a command, and any
+//! violation commands a safe stop within that same step.
+//!
+//! | monitor | states | needs |
+//! |---|---|---|
+//! | [`watchdog`] | all but SafeStop | the frame and `now` |
+//! | [`force`] | all but SafeStop | the frame and the rate window |
+//! | [`speed`] | Estimate, Manipulate | the rate window |
+//! | [`workspace`] | all but SafeStop (elbow with a model) | the frame |
+//! | [`joint_limits`] | Validated, Manipulate | the validated model |
+
+pub mod force;
+pub mod joint_limits;
+pub mod rates;
+pub mod speed;
+pub mod watchdog;
+pub mod workspace;
+
+/// Which limit a violation crossed. Codes are stable (they appear in logs
+/// and on the wire).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[repr(u16)]
+pub enum Limit {
+    /// A sensor value is NaN or infinite.
+    NonFiniteSensor = 1,
+    /// The clock `now` is NaN, infinite or went backwards.
+    ClockFault = 2,
+    /// The sensor time stamp went backwards.
+    SensorTimeReversed = 3,
+    /// The newest frame is older than allowed (or stamped in the future).
+    StaleSensor = 4,
+    /// Interaction force magnitude [N].
+    ForceMagnitude = 10,
+    /// Interaction torque magnitude [N m].
+    Torque = 11,
+    /// Rate of change of the force [N/s].
+    ForceRate = 12,
+    /// Grasp-point speed [m/s].
+    Speed = 20,
+    /// Grasp point below the table [m].
+    GraspBelowTable = 30,
+    /// Elbow below the table [m].
+    ElbowBelowTable = 31,
+    /// Grasp point outside the workspace box in x [m].
+    WorkspaceX = 32,
+    /// Grasp point outside the workspace box in z [m].
+    WorkspaceZ = 33,
+    /// Shoulder elevation q1 outside its range [rad].
+    ShoulderElevation = 40,
+    /// Elbow flexion q2 outside its range (below: hyperextension) [rad].
+    ElbowFlexion = 41,
+    /// The measured pose does not fit the validated model [m].
+    ModelMismatch = 42,
+}
+
+impl Limit {
+    /// Stable numeric code.
+    pub fn code(self) -> u16 {
+        self as u16
+    }
+}
+
+/// A limit crossed, with the measured value and the bound it crossed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Violation {
+    /// Which limit.
+    pub limit: Limit,
+    /// The measured value (NaN for a non-finite input).
+    pub value: f64,
+    /// The bound it crossed.
+    pub bound: f64,
+}
+
+impl Violation {
+    /// A violation of `limit`: `value` against `bound`.
+    pub const fn new(limit: Limit, value: f64, bound: f64) -> Self {
+        Self {
+            limit,
+            value,
+            bound,
+        }
+    }
+
+    /// By how much the bound was crossed (absolute, in the limit's unit;
+    /// NaN when the value was not finite).
+    pub fn excess(&self) -> f64 {
+        libm::fabs(self.value - self.bound)
+    }
+}
+
+/// A monitor's verdict.
+pub type Verdict = Result<(), Violation>;
+
+/// `Ok` when `value <= bound`, else a violation. NaN violates.
+pub(crate) fn at_most(limit: Limit, value: f64, bound: f64) -> Verdict {
+    if value <= bound {
+        Ok(())
+    } else {
+        Err(Violation::new(limit, value, bound))
+    }
+}
+
+/// `Ok` when `value` lies in `range`, else a violation against the crossed
+/// bound. NaN violates.
+pub(crate) fn within(limit: Limit, value: f64, range: crate::config::Interval) -> Verdict {
+    if value < range.low {
+        Err(Violation::new(limit, value, range.low))
+    } else if range.contains(value) {
+        Ok(())
+    } else {
+        Err(Violation::new(limit, value, range.high))
+    }
+}
