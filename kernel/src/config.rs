@@ -106,9 +106,11 @@ impl Default for SafetyLimits {
             max_force: 45.0,
             max_torque: 8.0,
             max_force_rate: 250.0,
-            // Twice the planned peak speed (0.05 m/s, the paper's 2.5 % of
-            // the iiwa's maximum): room for tracking overshoot and noise.
-            max_speed: 0.10,
+            // Three times the planned peak speed (0.05 m/s, the paper's 2.5 %
+            // of the iiwa's maximum): the passive arm swings ahead of the
+            // compliant robot when the elbow lifts off; the reference logs
+            // peak at 0.095 m/s over 50 ms (data/nominal/case6.csv, t = 18.4 s).
+            max_speed: 0.15,
             rate_window: 0.05,
             shoulder_elevation: Interval::new(-0.05, 1.75),
             elbow_flexion: Interval::new(-0.10, 2.60),
