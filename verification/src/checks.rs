@@ -1,0 +1,197 @@
+//! Checking functions: each states one safety property of the kernel in
+//! executable form and returns which part failed. The proptest properties
+//! and the Kani harnesses call these same functions, so a property means
+//! the same thing under every engine.
+
+use limb_kernel::arm::ArmGeometry;
+use limb_kernel::motion::SetPoint;
+use limb_kernel::trace::{Cause, Event};
+use limb_kernel::{Command, CommandMode, Kernel, KernelConfig, PathSample, StateKind};
+
+/// A failed check: which property, in words an auditor can match to `spec/`.
+pub type CheckResult = Result<(), &'static str>;
+
+fn ensure(condition: bool, failure: &'static str) -> CheckResult {
+    if condition {
+        Ok(())
+    } else {
+        Err(failure)
+    }
+}
+
+/// Relative slack for comparisons against saturation limits (rounding of
+/// the scaling by limit / magnitude).
+const ROUNDING: f64 = 1e-12;
+
+/// Every command: finite; force and torque within their limits; zero
+/// set-point velocity and acceleration unless tracking; the stop mode
+/// exactly in SafeStop, with zero wrench.
+pub fn check_command(command: &Command, config: &KernelConfig) -> CheckResult {
+    let limits = &config.limits;
+    ensure(command.is_finite(), "command is not finite")?;
+    ensure(
+        command.wrench.force_magnitude() <= limits.max_force * (1.0 + ROUNDING),
+        "commanded force exceeds the force limit",
+    )?;
+    ensure(
+        command.wrench.ty.abs() <= limits.max_torque * (1.0 + ROUNDING),
+        "commanded torque exceeds the torque limit",
+    )?;
+    let still = |s: &SetPoint| {
+        s.velocity.linear_speed() == 0.0
+            && s.velocity.psi == 0.0
+            && s.acceleration.linear_speed() == 0.0
+            && s.acceleration.psi == 0.0
+    };
+    if command.mode != CommandMode::Track {
+        ensure(
+            command.set_point.as_ref().is_none_or(still),
+            "a hold or stop command moves the set-point",
+        )?;
+    }
+    ensure(
+        (command.mode == CommandMode::Stop) == (command.state == StateKind::SafeStop),
+        "stop mode and SafeStop disagree",
+    )?;
+    if command.mode == CommandMode::Stop {
+        ensure(
+            command.wrench.force_magnitude() == 0.0 && command.wrench.ty == 0.0,
+            "a stop command applies a wrench",
+        )?;
+    }
+    Ok(())
+}
+
+/// True when `frame` at `now` crosses a limit that needs no history: a
+/// non-finite value, a stale or future frame, force, torque, table,
+/// workspace box, and, with a model, the elbow, the joint limits and the
+/// model fit. Written independently of the kernel's monitors.
+pub fn instantaneous_violation(
+    frame: &PathSample,
+    now: f64,
+    config: &KernelConfig,
+    arm: Option<&ArmGeometry>,
+) -> bool {
+    let l = &config.limits;
+    let p = frame.pose;
+    let w = frame.wrench;
+    let values = [frame.time, now, p.x, p.z, p.psi, w.fx, w.fz, w.ty];
+    if values.iter().any(|v| !v.is_finite()) {
+        return true;
+    }
+    let age = now - frame.time;
+    let floor = -l.table_tolerance;
+    if age < 0.0
+        || age > l.max_sensor_age
+        || (w.fx * w.fx + w.fz * w.fz).sqrt() > l.max_force
+        || w.ty.abs() > l.max_torque
+        || p.z < floor
+        || p.x < l.workspace_x.low
+        || p.x > l.workspace_x.high
+        || p.z < l.workspace_z.low
+        || p.z > l.workspace_z.high
+    {
+        return true;
+    }
+    let Some(arm) = arm else { return false };
+    // Elbow from the grasp pose: E = G + l2 (cos psi, -sin psi).
+    let ex = p.x + arm.forearm_length() * p.psi.cos();
+    let ez = p.z - arm.forearm_length() * p.psi.sin();
+    let s = arm.shoulder();
+    let reach = (s.x - ex).hypot(ez - s.z);
+    let q1 = (ez - s.z).atan2(s.x - ex);
+    let q2 = p.psi - q1;
+    ez < floor
+        || (reach - arm.upper_arm_length()).abs() > l.max_model_mismatch
+        || !l.shoulder_elevation.contains(q1)
+        || !l.elbow_flexion.contains(q2)
+}
+
+/// A model of the session that the kernel's observable behaviour must
+/// follow: Manipulate only after the validator accepted a model since the
+/// last reset, and SafeStop latched with an unchanging stop command until a
+/// reset.
+#[derive(Clone, Debug, Default)]
+pub struct SessionOracle {
+    model_validated: bool,
+    latched: Option<Command>,
+}
+
+impl SessionOracle {
+    /// Consumes the kernel's trace events since the last call.
+    pub fn observe_events(&mut self, kernel: &mut Kernel) -> CheckResult {
+        while let Some(event) = kernel.pop_event() {
+            if let Event::Transition { from, to, cause } = event.event {
+                match (from, to, cause) {
+                    (StateKind::Estimate, StateKind::Validated, Cause::ModelValidated) => {
+                        self.model_validated = true;
+                    }
+                    (StateKind::SafeStop, StateKind::Grasp, _) => {
+                        self.model_validated = false;
+                        self.latched = None;
+                    }
+                    (StateKind::SafeStop, _, _) => {
+                        return Err("SafeStop was left other than by a reset to Grasp")
+                    }
+                    _ => {}
+                }
+            }
+        }
+        self.check_gating(kernel)
+    }
+
+    /// Manipulate and Validated hold a model, and one was validated since
+    /// the last reset.
+    pub fn check_gating(&self, kernel: &Kernel) -> CheckResult {
+        let kind = kernel.state().kind();
+        if matches!(kind, StateKind::Validated | StateKind::Manipulate) {
+            ensure(
+                self.model_validated,
+                "a model-holding state was reached without validation",
+            )?;
+            ensure(
+                kernel.state().arm().is_some(),
+                "a model-holding state has no model",
+            )?;
+        }
+        Ok(())
+    }
+
+    /// Once in SafeStop, every command is the same stop command until a reset.
+    pub fn check_latched(&mut self, command: &Command) -> CheckResult {
+        match (&self.latched, command.state) {
+            (Some(latched), _) => ensure(
+                latched == command,
+                "the stop command changed before a reset",
+            ),
+            (None, StateKind::SafeStop) => {
+                self.latched = Some(*command);
+                Ok(())
+            }
+            (None, _) => Ok(()),
+        }
+    }
+}
+
+/// One checked step: runs the kernel and every per-step check. Returns the
+/// command, or the first property that failed.
+pub fn checked_step(
+    kernel: &mut Kernel,
+    oracle: &mut SessionOracle,
+    frame: &PathSample,
+    now: f64,
+) -> Result<Command, &'static str> {
+    let arm = kernel.state().arm().map(|a| *a.geometry());
+    let config = *kernel.config();
+    let command = kernel.step(frame, now);
+    check_command(&command, &config)?;
+    if instantaneous_violation(frame, now, &config, arm.as_ref()) {
+        ensure(
+            command.state == StateKind::SafeStop,
+            "a monitor violation did not stop in the same step",
+        )?;
+    }
+    oracle.observe_events(kernel)?;
+    oracle.check_latched(&command)?;
+    Ok(command)
+}
