@@ -1,0 +1,85 @@
+//! The history-based monitors (speed, force rate, watchdog), each tripped
+//! on purpose in the state it guards, with the limit named in the stop
+//! reason; and a quiet nominal lift.
+
+use limb_kernel::geometry::{Pose, Wrench};
+use limb_kernel::monitor::Limit;
+use limb_kernel::{Kernel, PathSample, Request, State, StateKind, StopReason};
+use limb_verification::scenario::{arm, kernel_after_lift, kernel_in_grasp, LIFT_WRENCH};
+
+fn stop_limit(kernel: &Kernel) -> Option<Limit> {
+    match kernel.state() {
+        State::SafeStop(stop) => match stop.reason() {
+            StopReason::Monitor(violation) => Some(violation.limit),
+            _ => None,
+        },
+        _ => None,
+    }
+}
+
+fn estimating() -> Kernel {
+    let mut kernel = kernel_in_grasp(&arm(0.30, 0.20));
+    kernel.request(Request::StartEstimation, 0.0).unwrap();
+    kernel
+}
+
+fn frame(time: f64, pose: Pose, wrench: Wrench) -> PathSample {
+    PathSample { time, pose, wrench }
+}
+
+/// REQ-MON-SPEED: a grasp point moving at 0.2 m/s stops the estimation.
+#[test]
+fn req_mon_speed_fast_grasp_point_stops() {
+    let mut kernel = estimating();
+    for i in 1..=20 {
+        let t = f64::from(i) * 0.01;
+        kernel.step(&frame(t, Pose::new(0.2 * t, 0.0, 0.0), LIFT_WRENCH), t);
+    }
+    assert_eq!(stop_limit(&kernel), Some(Limit::Speed));
+}
+
+/// REQ-MON-FORCE-RATE: a force that jumps by 30 N within 10 ms stops,
+/// although the force itself stays under its limit.
+#[test]
+fn req_mon_force_rate_jump_stops() {
+    let mut kernel = estimating();
+    kernel.step(
+        &frame(0.01, Pose::default(), Wrench::new(0.0, 0.0, 0.0)),
+        0.01,
+    );
+    kernel.step(
+        &frame(0.02, Pose::default(), Wrench::new(30.0, 0.0, 0.0)),
+        0.02,
+    );
+    assert_eq!(stop_limit(&kernel), Some(Limit::ForceRate));
+}
+
+/// REQ-MON-WATCHDOG: a stale frame, a frame from the past and a clock
+/// running backwards each stop the kernel.
+#[test]
+fn req_mon_watchdog_stale_reversed_and_clock_faults_stop() {
+    let cases: [(&str, [(f64, f64); 2], Limit); 3] = [
+        ("stale", [(0.01, 0.01), (0.02, 0.10)], Limit::StaleSensor),
+        (
+            "reversed",
+            [(0.02, 0.02), (0.01, 0.02)],
+            Limit::SensorTimeReversed,
+        ),
+        ("clock", [(0.02, 0.02), (0.02, 0.01)], Limit::ClockFault),
+    ];
+    for (name, steps, limit) in cases {
+        let mut kernel = estimating();
+        for (time, now) in steps {
+            kernel.step(&frame(time, Pose::default(), LIFT_WRENCH), now);
+        }
+        assert_eq!(stop_limit(&kernel), Some(limit), "{name}");
+    }
+}
+
+/// REQ-MON-NOMINAL: the nominal synthetic lift trips no monitor and ends
+/// validated.
+#[test]
+fn req_mon_nominal_lift_is_quiet() {
+    let (kernel, _) = kernel_after_lift(&arm(0.30, 0.20));
+    assert_eq!(kernel.state().kind(), StateKind::Validated);
+}

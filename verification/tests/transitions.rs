@@ -1,0 +1,134 @@
+//! The transition table: every state × every request, against the table
+//! the state module documents; plus the refusals that carry a reason.
+
+use limb_kernel::arm::JointAngles;
+use limb_kernel::state::TargetError;
+use limb_kernel::{Kernel, RefusalReason, Request, StateKind};
+use limb_verification::scenario::{arm, kernel_after_lift, kernel_in_grasp, TARGET};
+
+const REQUESTS: [Request; 5] = [
+    Request::StartEstimation,
+    Request::ApproveManipulation(TARGET),
+    Request::FinishManipulation,
+    Request::Stop,
+    Request::Reset,
+];
+
+/// A kernel in `state` and the time of its last step.
+fn kernel_in(state: StateKind) -> (Kernel, f64) {
+    let arm = arm(0.30, 0.20);
+    match state {
+        StateKind::Grasp => (kernel_in_grasp(&arm), 0.0),
+        StateKind::Estimate => {
+            let mut kernel = kernel_in_grasp(&arm);
+            kernel.request(Request::StartEstimation, 0.0).unwrap();
+            (kernel, 0.0)
+        }
+        StateKind::Validated => kernel_after_lift(&arm),
+        StateKind::Manipulate => {
+            let (mut kernel, t) = kernel_after_lift(&arm);
+            kernel
+                .request(Request::ApproveManipulation(TARGET), t)
+                .unwrap();
+            (kernel, t)
+        }
+        StateKind::SafeStop => {
+            let mut kernel = kernel_in_grasp(&arm);
+            kernel.request(Request::Stop, 0.0).unwrap();
+            (kernel, 0.0)
+        }
+    }
+}
+
+/// The state a request leads to, or `None` when it must be refused as not
+/// allowed in that state.
+fn expected(state: StateKind, request: Request) -> Option<StateKind> {
+    use StateKind::*;
+    match (state, request) {
+        (_, Request::Stop) => Some(SafeStop),
+        (Grasp, Request::StartEstimation) => Some(Estimate),
+        (Validated, Request::ApproveManipulation(_)) => Some(Manipulate),
+        (Manipulate, Request::FinishManipulation) => Some(Validated),
+        (SafeStop, Request::Reset) => Some(Grasp),
+        _ => None,
+    }
+}
+
+/// REQ-SM-001, REQ-SM-002: every state × request pair follows the table;
+/// a refused request names the request and state and leaves the state as
+/// it was.
+#[test]
+fn req_sm_001_every_state_and_request_follows_the_table() {
+    let states = [
+        StateKind::Grasp,
+        StateKind::Estimate,
+        StateKind::Validated,
+        StateKind::Manipulate,
+        StateKind::SafeStop,
+    ];
+    for state in states {
+        for request in REQUESTS {
+            let (mut kernel, t) = kernel_in(state);
+            assert_eq!(kernel.state().kind(), state);
+            let result = kernel.request(request, t);
+            match expected(state, request) {
+                Some(to) => {
+                    assert_eq!(result, Ok(to), "{state:?} × {request:?}");
+                    assert_eq!(kernel.state().kind(), to);
+                }
+                None => {
+                    let refusal = result.expect_err("must be refused");
+                    assert_eq!(refusal.reason, RefusalReason::NotAllowedInState);
+                    assert_eq!((refusal.request, refusal.state), (request, state));
+                    assert_eq!(kernel.state().kind(), state, "a refusal changed the state");
+                }
+            }
+        }
+    }
+}
+
+/// REQ-SM-003: a manipulation target outside the joint limits is refused
+/// with the violated limit, and the kernel stays in Validated.
+#[test]
+fn req_sm_003_target_outside_joint_limits_is_refused() {
+    let (mut kernel, t) = kernel_in(StateKind::Validated);
+    let hyperextended = JointAngles {
+        shoulder_elevation: 0.6,
+        elbow_flexion: -0.5,
+    };
+    let refusal = kernel
+        .request(Request::ApproveManipulation(hyperextended), t)
+        .unwrap_err();
+    assert!(matches!(
+        refusal.reason,
+        RefusalReason::Target(TargetError::JointLimits(_))
+    ));
+    assert_eq!(kernel.state().kind(), StateKind::Validated);
+    let nan = JointAngles {
+        shoulder_elevation: f64::NAN,
+        elbow_flexion: 0.5,
+    };
+    assert!(kernel
+        .request(Request::ApproveManipulation(nan), t)
+        .is_err());
+    assert_eq!(kernel.state().kind(), StateKind::Validated);
+}
+
+/// REQ-SM-004: estimation starts only from a fresh, finite measurement,
+/// and no request is honoured with a non-finite or reversed clock.
+#[test]
+fn req_sm_004_start_needs_fresh_data_and_a_sane_clock() {
+    let (mut kernel, _) = kernel_in(StateKind::Grasp);
+    let refusal = kernel.request(Request::StartEstimation, 1.0).unwrap_err();
+    assert_eq!(refusal.reason, RefusalReason::NoFreshMeasurement);
+    let refusal = kernel
+        .request(Request::StartEstimation, f64::NAN)
+        .unwrap_err();
+    assert_eq!(refusal.reason, RefusalReason::InvalidTime);
+    let (mut kernel, t) = kernel_in(StateKind::Validated);
+    let refusal = kernel
+        .request(Request::ApproveManipulation(TARGET), t - 1.0)
+        .unwrap_err();
+    assert_eq!(refusal.reason, RefusalReason::InvalidTime);
+    assert_eq!(kernel.state().kind(), StateKind::Validated);
+}
