@@ -2,6 +2,7 @@
 //! JSON keys, exit codes) is `../shared/spec/cli.md`; each subcommand lives in
 //! its own module and returns a [`CliError`] that maps to the exit code.
 
+mod config;
 mod error;
 
 use clap::{Parser, Subcommand};
@@ -19,11 +20,16 @@ struct Cli {
 }
 
 #[derive(Subcommand)]
-enum Command {}
+enum Command {
+    /// Print the embedded default kernel configuration as JSON.
+    Config,
+}
 
 fn main() {
     let cli = Cli::parse();
-    let result: Result<(), CliError> = match cli.command {};
+    let result: Result<(), CliError> = match cli.command {
+        Command::Config => config::run(),
+    };
     if let Err(error) = result {
         eprintln!("limb: {error}");
         std::process::exit(error.exit_code());

@@ -58,7 +58,9 @@ fn req_mon_force_rate_jump_stops() {
 /// running backwards each stop the kernel.
 #[test]
 fn req_mon_watchdog_stale_reversed_and_clock_faults_stop() {
-    let cases: [(&str, [(f64, f64); 2], Limit); 3] = [
+    // (name, two steps as (frame time, now), the limit that must trip)
+    type Case = (&'static str, [(f64, f64); 2], Limit);
+    let cases: [Case; 3] = [
         ("stale", [(0.01, 0.01), (0.02, 0.10)], Limit::StaleSensor),
         (
             "reversed",
