@@ -4,6 +4,7 @@
 //! the same thing under every engine.
 
 use limb_kernel::arm::ArmGeometry;
+use limb_kernel::geometry::Pose;
 use limb_kernel::motion::SetPoint;
 use limb_kernel::trace::{Cause, Event};
 use limb_kernel::{Command, CommandMode, Kernel, KernelConfig, PathSample, StateKind};
@@ -93,7 +94,18 @@ pub fn instantaneous_violation(
     {
         return true;
     }
-    let Some(arm) = arm else { return false };
+    arm.is_some_and(|arm| model_violation(p, config, arm))
+}
+
+/// True when grasp pose `p` violates a limit that needs the arm model: the
+/// elbow below the table, the pose not fitting the model, or a joint angle
+/// out of range. Written from the formulas of `plant.md`, independently of
+/// the kernel's inverse kinematics.
+pub fn model_violation(p: Pose, config: &KernelConfig, arm: &ArmGeometry) -> bool {
+    let l = &config.limits;
+    if !p.is_finite() {
+        return true;
+    }
     // Elbow from the grasp pose: E = G + l2 (cos psi, -sin psi).
     let ex = p.x + arm.forearm_length() * p.psi.cos();
     let ez = p.z - arm.forearm_length() * p.psi.sin();
@@ -101,7 +113,7 @@ pub fn instantaneous_violation(
     let reach = (s.x - ex).hypot(ez - s.z);
     let q1 = (ez - s.z).atan2(s.x - ex);
     let q2 = p.psi - q1;
-    ez < floor
+    ez < -l.table_tolerance
         || (reach - arm.upper_arm_length()).abs() > l.max_model_mismatch
         || !l.shoulder_elevation.contains(q1)
         || !l.elbow_flexion.contains(q2)
@@ -138,6 +150,12 @@ impl SessionOracle {
             }
         }
         self.check_gating(kernel)
+    }
+
+    /// Starts observing a kernel that is already past validation (a proof
+    /// that begins from a validated kernel).
+    pub fn trust_current_model(&mut self, kernel: &Kernel) {
+        self.model_validated = kernel.state().arm().is_some();
     }
 
     /// Manipulate and Validated hold a model, and one was validated since
