@@ -35,7 +35,7 @@ use crate::path::PathSample;
 use crate::validate::{validate, Rejection, ValidatedArm, ValidationLimits};
 
 /// Names of the states, for events and reports.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[repr(u8)]
 pub enum StateKind {

@@ -8,6 +8,7 @@
 //!   properties, the transition-table test and the benchmarks.
 
 pub mod checks;
+pub mod explore;
 #[cfg(not(kani))]
 pub mod kani_stand_in;
 pub mod proofs;
