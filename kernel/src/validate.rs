@@ -93,6 +93,20 @@ pub enum Rejection {
 }
 
 /// An arm model that passed validation. Only [`validate`] makes one.
+///
+/// REQ-VAL-002: it cannot be built any other way; this does not compile:
+///
+/// ```compile_fail
+/// use limb_kernel::validate::ValidatedArm;
+/// let forged = ValidatedArm { geometry: todo!(), estimate: todo!() };
+/// ```
+///
+/// and neither can a manipulating state be made without one:
+///
+/// ```compile_fail
+/// use limb_kernel::state::Manipulate;
+/// let forged = Manipulate { arm: todo!(), motion: todo!(), started_at: 0.0 };
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct ValidatedArm {

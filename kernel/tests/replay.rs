@@ -54,8 +54,10 @@ fn replay(log: &[PathSample]) -> Kernel {
     kernel
 }
 
+/// REQ-EST-002, REQ-MON-008: the six noisy reference logs, replayed
+/// through the kernel, trip no monitor and validate an arm within 10 mm.
 #[test]
-fn noisy_logs_reach_validated_with_the_right_arm() {
+fn req_est_002_noisy_logs_reach_validated_with_the_right_arm() {
     let truth = [
         (0.33, 0.20),
         (0.33, 0.18),

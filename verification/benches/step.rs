@@ -1,4 +1,4 @@
-//! Benchmark of one kernel step in Manipulate (monitors + impedance), with
+//! REQ-TIME-001: benchmark of one kernel step in Manipulate (monitors + impedance), with
 //! the bare impedance law measured side by side as the baseline.
 //!
 //! Two measurements in one process:

@@ -176,7 +176,7 @@ pub fn proof_impedance_wrench_is_saturated_and_finite() {
     kani::cover!(!out.saturation.any(), "impedance: within limits");
 }
 
-/// REQ-PANIC-001, REQ-CMD-001, REQ-MON-007: one step from Grasp or from
+/// REQ-PANIC-001, REQ-CMD-001, REQ-MON-006, REQ-MON-007: one step from Grasp or from
 /// Validated with any frame and any clock never panics, gives a command
 /// that passes [`check_command`], and stops on any instantaneous violation.
 #[cfg_attr(kani, kani::proof)]
@@ -239,7 +239,7 @@ pub fn proof_manipulate_needs_a_validated_model() {
     kani::cover!(manipulating, "gating: Manipulate reached");
 }
 
-/// REQ-SM-006: once stopped, every step and every request but Reset keeps
+/// REQ-SM-006, REQ-CMD-003: once stopped, every step and every request but Reset keeps
 /// the same zero-motion, zero-wrench command.
 #[cfg_attr(kani, kani::proof)]
 #[cfg_attr(kani, kani::unwind(130))]

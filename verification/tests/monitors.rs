@@ -27,9 +27,9 @@ fn frame(time: f64, pose: Pose, wrench: Wrench) -> PathSample {
     PathSample { time, pose, wrench }
 }
 
-/// REQ-MON-SPEED: a grasp point moving at 0.2 m/s stops the estimation.
+/// REQ-MON-003: a grasp point moving at 0.2 m/s stops the estimation.
 #[test]
-fn req_mon_speed_fast_grasp_point_stops() {
+fn req_mon_003_fast_grasp_point_stops() {
     let mut kernel = estimating();
     for i in 1..=20 {
         let t = f64::from(i) * 0.01;
@@ -38,10 +38,10 @@ fn req_mon_speed_fast_grasp_point_stops() {
     assert_eq!(stop_limit(&kernel), Some(Limit::Speed));
 }
 
-/// REQ-MON-FORCE-RATE: a force that jumps by 30 N within 10 ms stops,
+/// REQ-MON-002: a force that jumps by 30 N within 10 ms stops,
 /// although the force itself stays under its limit.
 #[test]
-fn req_mon_force_rate_jump_stops() {
+fn req_mon_002_force_rate_jump_stops() {
     let mut kernel = estimating();
     kernel.step(
         &frame(0.01, Pose::default(), Wrench::new(0.0, 0.0, 0.0)),
@@ -54,10 +54,10 @@ fn req_mon_force_rate_jump_stops() {
     assert_eq!(stop_limit(&kernel), Some(Limit::ForceRate));
 }
 
-/// REQ-MON-WATCHDOG: a stale frame, a frame from the past and a clock
+/// REQ-MON-006: a stale frame, a frame from the past and a clock
 /// running backwards each stop the kernel.
 #[test]
-fn req_mon_watchdog_stale_reversed_and_clock_faults_stop() {
+fn req_mon_006_stale_reversed_and_clock_faults_stop() {
     // (name, two steps as (frame time, now), the limit that must trip)
     type Case = (&'static str, [(f64, f64); 2], Limit);
     let cases: [Case; 3] = [
@@ -78,10 +78,10 @@ fn req_mon_watchdog_stale_reversed_and_clock_faults_stop() {
     }
 }
 
-/// REQ-MON-NOMINAL: the nominal synthetic lift trips no monitor and ends
+/// REQ-MON-008: the nominal synthetic lift trips no monitor and ends
 /// validated.
 #[test]
-fn req_mon_nominal_lift_is_quiet() {
+fn req_mon_008_nominal_lift_is_quiet() {
     let (kernel, _) = kernel_after_lift(&arm(0.30, 0.20));
     assert_eq!(kernel.state().kind(), StateKind::Validated);
 }

@@ -5,6 +5,8 @@
 use limb_kernel::{KernelConfig, StateKind};
 use limb_verification::explore::{expected_stop_limits, explore, StopKind};
 
+/// REQ-SM-001, REQ-SM-005, REQ-MON-007: every abstract state and
+/// transition reached from a fresh kernel passes every check.
 #[test]
 fn req_sm_001_state_space_exploration_finds_no_violation() {
     let report = explore(KernelConfig::default(), 8).unwrap_or_else(|failure| panic!("{failure}"));

@@ -1,0 +1,226 @@
+//! Traceability between `spec/requirements.toml`, `spec/hazards.md` and the
+//! checks in the repository. Fails when:
+//! * a requirement names no check, or a check that does not exist;
+//! * a named test or harness does not mention its requirement's ID;
+//! * a `req_*` test or `proof_*` harness is named by no requirement, or
+//!   mentions an ID that does not exist;
+//! * a requirement cites an unknown hazard, or a hazard has no requirement;
+//! * `spec/traceability.md` is not the table this test generates (run with
+//!   `LIMB_BLESS=1` to rewrite it).
+
+use serde::Deserialize;
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+
+#[derive(Deserialize)]
+struct Spec {
+    requirement: Vec<Requirement>,
+}
+
+#[derive(Deserialize)]
+struct Requirement {
+    id: String,
+    title: String,
+    statement: String,
+    hazards: Vec<String>,
+    verified_by: Vec<String>,
+}
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn read(path: &str) -> Result<String, String> {
+    std::fs::read_to_string(root().join(path)).map_err(|e| format!("{path}: {e}"))
+}
+
+/// The doc comment and attribute lines directly above `fn name`.
+fn doc_above(text: &str, name: &str) -> Option<String> {
+    let lines: Vec<&str> = text.lines().collect();
+    let at = lines.iter().position(|l| {
+        let l = l.trim_start();
+        l.starts_with(&format!("fn {name}(")) || l.starts_with(&format!("pub fn {name}("))
+    })?;
+    let mut doc = Vec::new();
+    for line in lines[..at].iter().rev() {
+        let t = line.trim_start();
+        if t.starts_with("///") || t.starts_with("#[") || t.starts_with("//") {
+            doc.push(t.to_string());
+        } else {
+            break;
+        }
+    }
+    Some(doc.join("\n"))
+}
+
+/// Checks one `verified_by` entry of requirement `id`.
+fn check_entry(id: &str, entry: &str) -> Result<(), String> {
+    let (kind, rest) = entry
+        .split_once(':')
+        .ok_or(format!("{id}: malformed entry {entry}"))?;
+    match kind {
+        "test" | "proof" => {
+            let (file, name) = rest
+                .split_once("::")
+                .ok_or(format!("{id}: malformed entry {entry}"))?;
+            let text = read(file)?;
+            let doc = doc_above(&text, name).ok_or(format!("{id}: {file} has no fn {name}"))?;
+            let named = name.starts_with("req_") || name.starts_with("proof_");
+            if named && !doc.contains(id) {
+                return Err(format!(
+                    "{id}: {file}::{name} does not name {id} in its doc comment"
+                ));
+            }
+            if kind == "proof" && !text.contains(&format!("fn {name}()")) {
+                return Err(format!("{id}: {name} is not a harness"));
+            }
+            Ok(())
+        }
+        "doctest" | "bench" | "ci" => {
+            let (file, marker) = rest
+                .split_once('#')
+                .ok_or(format!("{id}: malformed entry {entry}"))?;
+            let text = read(file)?;
+            if !text.contains(marker) {
+                return Err(format!("{id}: {file} does not contain {marker}"));
+            }
+            if kind == "doctest" && !text.contains("compile_fail") {
+                return Err(format!("{id}: {file} has no compile_fail doc test"));
+            }
+            Ok(())
+        }
+        other => Err(format!("{id}: unknown kind {other}")),
+    }
+}
+
+/// Every `req_*` test and `proof_*` harness in the repository's test and
+/// proof files, with the file it is in.
+fn checks_in_repository() -> Vec<(String, String)> {
+    let mut files = vec!["verification/src/proofs.rs".to_string()];
+    for dir in ["verification/tests", "kernel/tests"] {
+        let mut entries: Vec<_> = std::fs::read_dir(root().join(dir))
+            .map(|d| d.filter_map(Result::ok).map(|e| e.path()).collect())
+            .unwrap_or_default();
+        entries.sort();
+        for path in entries {
+            if path.extension().is_some_and(|e| e == "rs") {
+                files.push(format!(
+                    "{dir}/{}",
+                    path.file_name().unwrap().to_string_lossy()
+                ));
+            }
+        }
+    }
+    let mut found = Vec::new();
+    for file in files {
+        let text = read(&file).unwrap();
+        for line in text.lines() {
+            let t = line.trim_start().trim_start_matches("pub ");
+            if let Some(rest) = t.strip_prefix("fn ") {
+                let name: String = rest
+                    .chars()
+                    .take_while(|c| c.is_alphanumeric() || *c == '_')
+                    .collect();
+                if name.starts_with("req_") || name.starts_with("proof_") {
+                    found.push((file.clone(), name));
+                }
+            }
+        }
+    }
+    found
+}
+
+fn table(spec: &Spec) -> String {
+    let mut out = String::from(
+        "# Traceability\n\nGenerated by `verification/tests/traceability.rs` from \
+         `requirements.toml` (run `LIMB_BLESS=1 cargo test -p limb-verification --test traceability` \
+         to regenerate). Every requirement, the hazards it mitigates, and the checks that verify it.\n\n\
+         | requirement | title | hazards | verified by |\n|---|---|---|---|\n",
+    );
+    for r in &spec.requirement {
+        let checks: Vec<String> = r.verified_by.iter().map(|v| format!("`{v}`")).collect();
+        out.push_str(&format!(
+            "| {} | {} | {} | {} |\n",
+            r.id,
+            r.title,
+            r.hazards.join(", "),
+            checks.join("<br>")
+        ));
+    }
+    out
+}
+
+#[test]
+fn every_requirement_is_verified_and_every_check_traces_to_one() {
+    let spec: Spec = toml::from_str(&read("spec/requirements.toml").unwrap()).unwrap();
+    let hazards_text = read("spec/hazards.md").unwrap();
+    let mut failures = Vec::new();
+    let mut ids = BTreeSet::new();
+    let mut referenced: BTreeMap<(String, String), Vec<String>> = BTreeMap::new();
+    let mut hazards_covered = BTreeSet::new();
+    for r in &spec.requirement {
+        if !ids.insert(r.id.clone()) {
+            failures.push(format!("{}: duplicate id", r.id));
+        }
+        if r.statement.trim().is_empty() || r.title.trim().is_empty() {
+            failures.push(format!("{}: empty title or statement", r.id));
+        }
+        if r.verified_by.is_empty() {
+            failures.push(format!("{}: no verification", r.id));
+        }
+        for entry in &r.verified_by {
+            if let Err(e) = check_entry(&r.id, entry) {
+                failures.push(e);
+            }
+            if let Some((file, name)) = entry
+                .split_once(':')
+                .and_then(|(_, rest)| rest.split_once("::"))
+            {
+                referenced
+                    .entry((file.to_string(), name.to_string()))
+                    .or_default()
+                    .push(r.id.clone());
+            }
+        }
+        for h in &r.hazards {
+            if !hazards_text.contains(&format!("| {h} |")) {
+                failures.push(format!("{}: unknown hazard {h}", r.id));
+            }
+            hazards_covered.insert(h.clone());
+        }
+    }
+    for line in hazards_text.lines() {
+        if let Some(h) = line.strip_prefix("| ").and_then(|l| l.split(' ').next()) {
+            if h.starts_with("HAZ-") && !hazards_covered.contains(h) {
+                failures.push(format!("{h}: no requirement mitigates it"));
+            }
+        }
+    }
+    for (file, name) in checks_in_repository() {
+        let Some(cited_by) = referenced.get(&(file.clone(), name.clone())) else {
+            failures.push(format!("{file}::{name}: named by no requirement"));
+            continue;
+        };
+        let doc = doc_above(&read(&file).unwrap(), &name).unwrap_or_default();
+        for token in doc.split(|c: char| !(c.is_alphanumeric() || c == '-')) {
+            if token.starts_with("REQ-") && !ids.contains(token) {
+                failures.push(format!("{file}::{name}: mentions unknown {token}"));
+            }
+        }
+        if cited_by.is_empty() {
+            failures.push(format!("{file}::{name}: no requirement"));
+        }
+    }
+    let generated = table(&spec);
+    let path = root().join("spec/traceability.md");
+    if std::env::var_os("LIMB_BLESS").is_some() {
+        std::fs::write(&path, &generated).unwrap();
+    } else if std::fs::read_to_string(&path).ok().as_deref() != Some(generated.as_str()) {
+        failures.push("spec/traceability.md is stale: rerun with LIMB_BLESS=1".into());
+    }
+    assert!(
+        failures.is_empty(),
+        "traceability failures:\n{}",
+        failures.join("\n")
+    );
+}

@@ -1,0 +1,83 @@
+//! REQ-VAL-001: the validator never accepts a model outside its ranges.
+
+use limb_kernel::estimation::{ArmEstimate, FitEvidence, Method};
+use limb_kernel::geometry::Point;
+use limb_kernel::validate::{validate, ValidationLimits};
+use proptest::prelude::*;
+
+fn number() -> impl Strategy<Value = f64> {
+    prop_oneof![
+        6 => -0.1..0.6f64,
+        1 => any::<f64>(),
+        1 => Just(f64::NAN),
+        1 => Just(f64::INFINITY),
+    ]
+}
+
+prop_compose! {
+    fn estimate()(l1 in number(), l2 in number(), ex in number(), ez in number(),
+                  sx in number(), sz in number(), arcs in (number(), number()),
+                  residuals in (0.0..0.01f64, 0.0..0.01f64),
+                  disagreement in prop::option::of(0.0..0.01f64)) -> ArmEstimate {
+        ArmEstimate {
+            upper_arm_length: l1,
+            forearm_length: l2,
+            elbow: Point::new(ex, ez),
+            shoulder: Point::new(sx, sz),
+            method: Method::Auto,
+            evidence: FitEvidence {
+                forearm_arc: arcs.0 * 4.0,
+                upper_arm_arc: arcs.1 * 4.0,
+                forearm_residual: residuals.0,
+                upper_arm_residual: residuals.1,
+                method_disagreement: disagreement,
+                forearm_samples: 100,
+                upper_arm_samples: 100,
+            },
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(4000))]
+    /// REQ-VAL-001: whatever the estimate, an accepted model has finite
+    /// lengths inside the anthropometric ranges, enough arc, small residuals
+    /// and methods that agree.
+    #[test]
+    fn req_val_001_validator_never_accepts_outside_ranges(e in estimate(), gx in number(), gz in number()) {
+        let limits = ValidationLimits::default();
+        if let Ok(arm) = validate(&e, Point::new(gx, gz), &limits) {
+            let g = arm.geometry();
+            prop_assert!(g.upper_arm_length().is_finite() && g.forearm_length().is_finite());
+            prop_assert!((limits.min_upper_arm_length..=limits.max_upper_arm_length).contains(&g.upper_arm_length()));
+            prop_assert!((limits.min_forearm_length..=limits.max_forearm_length).contains(&g.forearm_length()));
+            prop_assert!(e.evidence.forearm_arc >= limits.min_arc && e.evidence.upper_arm_arc >= limits.min_arc);
+            prop_assert!(e.evidence.forearm_residual <= limits.max_residual);
+            prop_assert!(e.evidence.method_disagreement.is_none_or(|d| d <= limits.max_method_disagreement));
+            prop_assert!((e.elbow.distance(e.shoulder) - g.upper_arm_length()).abs() <= limits.max_geometry_mismatch);
+        }
+    }
+}
+
+/// REQ-VAL-001: a consistent estimate is accepted, so the property above
+/// is not vacuous.
+#[test]
+fn req_val_001_a_consistent_estimate_is_accepted() {
+    let e = ArmEstimate {
+        upper_arm_length: 0.30,
+        forearm_length: 0.20,
+        elbow: Point::new(0.20, 0.0),
+        shoulder: Point::new(0.50, 0.0),
+        method: Method::Auto,
+        evidence: FitEvidence {
+            forearm_arc: 1.2,
+            upper_arm_arc: 1.2,
+            forearm_residual: 0.001,
+            upper_arm_residual: 0.001,
+            method_disagreement: Some(0.001),
+            forearm_samples: 100,
+            upper_arm_samples: 100,
+        },
+    };
+    assert!(validate(&e, Point::new(0.0, 0.0), &ValidationLimits::default()).is_ok());
+}
