@@ -125,6 +125,17 @@ pub enum TargetError {
     Plan(PlanError),
 }
 
+impl StateKind {
+    /// Every state, in diagram order.
+    pub const ALL: [StateKind; 5] = [
+        StateKind::Grasp,
+        StateKind::Estimate,
+        StateKind::Validated,
+        StateKind::Manipulate,
+        StateKind::SafeStop,
+    ];
+}
+
 impl Grasp {
     /// The initial state: no pose latched yet.
     pub const fn new() -> Self {

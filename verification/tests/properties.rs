@@ -129,6 +129,18 @@ impl Session {
         Ok(())
     }
 
+    /// A frame stamped `now` at clock `now`.
+    fn fresh(&mut self, now: f64, pose: Pose, wrench: Wrench) -> Result<(), TestCaseError> {
+        self.step(
+            PathSample {
+                time: now,
+                pose,
+                wrench,
+            },
+            now,
+        )
+    }
+
     fn ask(&mut self, request: Request) -> Result<(), TestCaseError> {
         let _ = self.kernel.request(request, self.now);
         self.oracle
@@ -197,14 +209,7 @@ impl Session {
             }
             Op::Hold { dt } => {
                 let now = self.advance(dt.abs().min(0.02));
-                self.step(
-                    PathSample {
-                        time: now,
-                        pose: self.pose,
-                        wrench: LIFT_WRENCH,
-                    },
-                    now,
-                )
+                self.fresh(now, self.pose, LIFT_WRENCH)
             }
             Op::Push { dt, wrench } => {
                 let now = self.advance(dt.abs().min(0.02));
@@ -269,14 +274,7 @@ impl Session {
                     let now = start + t;
                     self.now = now;
                     self.pose = self.arm.forward(lift_angles(t));
-                    self.step(
-                        PathSample {
-                            time: now,
-                            pose: self.pose,
-                            wrench: LIFT_WRENCH,
-                        },
-                        now,
-                    )?;
+                    self.fresh(now, self.pose, LIFT_WRENCH)?;
                 }
                 Ok(())
             }
@@ -307,13 +305,7 @@ fn arbitrary_sessions_keep_every_safety_property() {
         })
         .unwrap();
     let visited = visited.into_inner();
-    for state in [
-        StateKind::Grasp,
-        StateKind::Estimate,
-        StateKind::Validated,
-        StateKind::Manipulate,
-        StateKind::SafeStop,
-    ] {
+    for state in StateKind::ALL {
         assert!(
             visited.contains(&(state as u8)),
             "no generated session reached {state:?}"

@@ -20,13 +20,7 @@ fn req_sm_001_state_space_exploration_finds_no_violation() {
     for state in &report.states {
         println!("  {state:?}");
     }
-    for state in [
-        StateKind::Grasp,
-        StateKind::Estimate,
-        StateKind::Validated,
-        StateKind::Manipulate,
-        StateKind::SafeStop,
-    ] {
+    for state in StateKind::ALL {
         assert!(
             report.states.iter().any(|(kind, _)| *kind == state),
             "{state:?} never reached"

@@ -59,13 +59,7 @@ fn expected(state: StateKind, request: Request) -> Option<StateKind> {
 /// it was.
 #[test]
 fn req_sm_001_every_state_and_request_follows_the_table() {
-    let states = [
-        StateKind::Grasp,
-        StateKind::Estimate,
-        StateKind::Validated,
-        StateKind::Manipulate,
-        StateKind::SafeStop,
-    ];
+    let states = StateKind::ALL;
     for state in states {
         for request in REQUESTS {
             let (mut kernel, t) = kernel_in(state);
