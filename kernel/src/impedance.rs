@@ -195,6 +195,61 @@ mod tests {
     }
 
     #[test]
+    fn damping_opposes_motion_relative_to_the_set_point() {
+        let out = law().command(
+            Pose::default(),
+            PoseRate::new(0.01, -0.02, 0.0),
+            SetPoint::hold(Pose::default()),
+        );
+        // F = −D (v − v_d): D = 80 N s/m → (−0.8 N, +1.6 N).
+        assert!((out.wrench.fx + 0.8).abs() < 1e-12);
+        assert!((out.wrench.fz - 1.6).abs() < 1e-12);
+        let tracking = law().command(
+            Pose::default(),
+            PoseRate::new(0.01, -0.02, 0.0),
+            SetPoint {
+                pose: Pose::default(),
+                velocity: PoseRate::new(0.01, -0.02, 0.0),
+                acceleration: PoseRate::new(0.5, 0.0, 0.0),
+            },
+        );
+        // Tracking the set-point velocity leaves only the inertia term Λ ẍ_d.
+        assert!((tracking.wrench.fx - 1.0).abs() < 1e-12 && tracking.wrench.fz.abs() < 1e-12);
+    }
+
+    #[test]
+    fn set_point_speed_is_limited_with_flag() {
+        let fast = SetPoint {
+            pose: Pose::default(),
+            velocity: PoseRate::new(0.3, 0.4, 0.0),
+            acceleration: PoseRate::ZERO,
+        };
+        let out = law().command(Pose::default(), PoseRate::new(0.3, 0.4, 0.0), fast);
+        assert!((out.set_point.velocity.linear_speed() - 0.1).abs() < 1e-12);
+        assert!((out.set_point.velocity.x - 0.06).abs() < 1e-12);
+        assert!(out.saturation.speed && out.saturation.any());
+        let at_limit = SetPoint {
+            velocity: PoseRate::new(0.1, 0.0, 0.0),
+            ..fast
+        };
+        let out = law().command(Pose::default(), PoseRate::ZERO, at_limit);
+        assert!(!out.saturation.speed && !out.saturation.any());
+    }
+
+    #[test]
+    fn force_exactly_at_the_limit_is_not_flagged() {
+        // K = 200 N/m: an error of 0.225 m gives exactly 45 N.
+        let out = law().command(
+            Pose::new(0.225, 0.0, 0.8),
+            PoseRate::ZERO,
+            SetPoint::hold(Pose::default()),
+        );
+        assert_eq!(out.wrench.fx, -45.0);
+        assert_eq!(out.wrench.ty, -8.0);
+        assert!(!out.saturation.force && !out.saturation.torque);
+    }
+
+    #[test]
     fn non_finite_gives_zero_wrench() {
         let out = law().command(
             Pose::new(f64::NAN, 0.0, 0.0),

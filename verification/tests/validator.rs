@@ -15,26 +15,53 @@ fn number() -> impl Strategy<Value = f64> {
 }
 
 prop_compose! {
-    fn estimate()(l1 in number(), l2 in number(), ex in number(), ez in number(),
-                  sx in number(), sz in number(), arcs in (number(), number()),
-                  residuals in (0.0..0.01f64, 0.0..0.01f64),
-                  disagreement in prop::option::of(0.0..0.01f64)) -> ArmEstimate {
-        ArmEstimate {
-            upper_arm_length: l1,
-            forearm_length: l2,
-            elbow: Point::new(ex, ez),
-            shoulder: Point::new(sx, sz),
-            method: Method::Auto,
-            evidence: FitEvidence {
-                forearm_arc: arcs.0 * 4.0,
-                upper_arm_arc: arcs.1 * 4.0,
-                forearm_residual: residuals.0,
-                upper_arm_residual: residuals.1,
-                method_disagreement: disagreement,
-                forearm_samples: 100,
-                upper_arm_samples: 100,
-            },
-        }
+    /// Arbitrary fields (NaN and infinities included): mostly rejected.
+    fn arbitrary_estimate()(l1 in number(), l2 in number(), ex in number(), ez in number(),
+                            sx in number(), sz in number(), arcs in (number(), number()),
+                            residuals in (0.0..0.01f64, 0.0..0.01f64),
+                            disagreement in prop::option::of(0.0..0.01f64)) -> ArmEstimate {
+        estimate(l1, l2, Point::new(ex, ez), Point::new(sx, sz), arcs, residuals, disagreement)
+    }
+}
+
+prop_compose! {
+    /// A geometrically consistent arm whose lengths, arcs, residuals and
+    /// agreement straddle the validator's limits, so each check decides.
+    fn straddling_estimate()(l1 in 0.15..0.50f64, l2 in 0.08..0.40f64,
+                             lift in -0.03..0.03f64, angle in -0.1..0.1f64,
+                             arcs in (0.2..0.6f64, 0.2..0.6f64),
+                             residuals in (0.0..0.008f64, 0.0..0.008f64),
+                             disagreement in prop::option::of(0.0..0.008f64)) -> ArmEstimate {
+        let elbow = Point::new(l2, lift);
+        let shoulder = Point::new(elbow.x + l1 * angle.cos(), elbow.z + l1 * angle.sin());
+        estimate(l1, l2, elbow, shoulder, arcs, residuals, disagreement)
+    }
+}
+
+fn estimate(
+    l1: f64,
+    l2: f64,
+    elbow: Point,
+    shoulder: Point,
+    arcs: (f64, f64),
+    residuals: (f64, f64),
+    disagreement: Option<f64>,
+) -> ArmEstimate {
+    ArmEstimate {
+        upper_arm_length: l1,
+        forearm_length: l2,
+        elbow,
+        shoulder,
+        method: Method::Auto,
+        evidence: FitEvidence {
+            forearm_arc: arcs.0,
+            upper_arm_arc: arcs.1,
+            forearm_residual: residuals.0,
+            upper_arm_residual: residuals.1,
+            method_disagreement: disagreement,
+            forearm_samples: 100,
+            upper_arm_samples: 100,
+        },
     }
 }
 
@@ -44,15 +71,20 @@ proptest! {
     /// lengths inside the anthropometric ranges, enough arc, small residuals
     /// and methods that agree.
     #[test]
-    fn req_val_001_validator_never_accepts_outside_ranges(e in estimate(), gx in number(), gz in number()) {
+    fn req_val_001_validator_never_accepts_outside_ranges(
+        e in prop_oneof![arbitrary_estimate(), straddling_estimate()],
+        grasp in prop_oneof![Just(Point::new(0.0, 0.0)), (number(), number()).prop_map(|(x, z)| Point::new(x, z))],
+    ) {
         let limits = ValidationLimits::default();
-        if let Ok(arm) = validate(&e, Point::new(gx, gz), &limits) {
+        if let Ok(arm) = validate(&e, grasp, &limits) {
             let g = arm.geometry();
             prop_assert!(g.upper_arm_length().is_finite() && g.forearm_length().is_finite());
             prop_assert!((limits.min_upper_arm_length..=limits.max_upper_arm_length).contains(&g.upper_arm_length()));
             prop_assert!((limits.min_forearm_length..=limits.max_forearm_length).contains(&g.forearm_length()));
             prop_assert!(e.evidence.forearm_arc >= limits.min_arc && e.evidence.upper_arm_arc >= limits.min_arc);
             prop_assert!(e.evidence.forearm_residual <= limits.max_residual);
+            prop_assert!(e.evidence.upper_arm_residual <= limits.max_residual);
+            prop_assert!(e.elbow.z.abs() <= limits.max_geometry_mismatch);
             prop_assert!(e.evidence.method_disagreement.is_none_or(|d| d <= limits.max_method_disagreement));
             prop_assert!((e.elbow.distance(e.shoulder) - g.upper_arm_length()).abs() <= limits.max_geometry_mismatch);
         }

@@ -120,3 +120,60 @@ pub(crate) fn within(limit: Limit, value: f64, range: crate::config::Interval) -
         Err(Violation::new(limit, value, range.high))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::Interval;
+
+    #[test]
+    fn codes_are_stable() {
+        let table = [
+            (Limit::NonFiniteSensor, 1),
+            (Limit::ClockFault, 2),
+            (Limit::SensorTimeReversed, 3),
+            (Limit::StaleSensor, 4),
+            (Limit::ForceMagnitude, 10),
+            (Limit::Torque, 11),
+            (Limit::ForceRate, 12),
+            (Limit::Speed, 20),
+            (Limit::GraspBelowTable, 30),
+            (Limit::ElbowBelowTable, 31),
+            (Limit::WorkspaceX, 32),
+            (Limit::WorkspaceZ, 33),
+            (Limit::ShoulderElevation, 40),
+            (Limit::ElbowFlexion, 41),
+            (Limit::ModelMismatch, 42),
+        ];
+        for (limit, code) in table {
+            assert_eq!(limit.code(), code, "{limit:?}");
+        }
+    }
+
+    #[test]
+    fn excess_is_the_distance_past_the_bound() {
+        assert_eq!(Violation::new(Limit::Speed, 0.25, 0.15).excess(), 0.1);
+        assert_eq!(
+            Violation::new(Limit::GraspBelowTable, -0.007, -0.005).excess(),
+            0.002
+        );
+    }
+
+    #[test]
+    fn bounds_themselves_are_inside() {
+        let range = Interval::new(-1.0, 2.0);
+        assert_eq!(within(Limit::ElbowFlexion, -1.0, range), Ok(()));
+        assert_eq!(within(Limit::ElbowFlexion, 2.0, range), Ok(()));
+        assert_eq!(
+            within(Limit::ElbowFlexion, -1.5, range),
+            Err(Violation::new(Limit::ElbowFlexion, -1.5, -1.0))
+        );
+        assert_eq!(
+            within(Limit::ElbowFlexion, 2.5, range),
+            Err(Violation::new(Limit::ElbowFlexion, 2.5, 2.0))
+        );
+        assert!(within(Limit::ElbowFlexion, f64::NAN, range).is_err());
+        assert_eq!(at_most(Limit::Speed, 0.15, 0.15), Ok(()));
+        assert!(at_most(Limit::Speed, f64::NAN, 0.15).is_err());
+    }
+}
