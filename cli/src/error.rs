@@ -11,7 +11,6 @@
 #[derive(Debug, thiserror::Error)]
 pub enum CliError {
     /// The user's input is at fault (exit code 2).
-    #[allow(dead_code)] // until the first file-reading subcommand lands
     #[error("{0}")]
     BadInput(String),
     /// Limb itself failed (exit code 1).

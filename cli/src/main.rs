@@ -4,6 +4,7 @@
 
 mod config;
 mod error;
+mod run;
 
 use clap::{Parser, Subcommand};
 use error::CliError;
@@ -21,6 +22,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// One whole kernel session on the reference plant (the embedded default, no robot).
+    Run(run::RunArgs),
     /// Print the embedded default kernel configuration as JSON.
     Config,
 }
@@ -28,6 +31,7 @@ enum Command {
 fn main() {
     let cli = Cli::parse();
     let result: Result<(), CliError> = match cli.command {
+        Command::Run(args) => run::run(&args),
         Command::Config => config::run(),
     };
     if let Err(error) = result {

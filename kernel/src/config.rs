@@ -112,8 +112,13 @@ impl Default for SafetyLimits {
             // peak at 0.095 m/s over 50 ms (data/nominal/case6.csv, t = 18.4 s).
             max_speed: 0.15,
             rate_window: 0.05,
-            shoulder_elevation: Interval::new(-0.05, 1.75),
-            elbow_flexion: Interval::new(-0.10, 2.60),
+            // The reference lift (plant.md's estimation motion on the paper's
+            // dummy) ends at q1 = 1.40-1.86 rad and q2 = +0.28 to -0.31 rad
+            // (17.8° of elbow hyperextension for l1 = 0.27 m, l2 = 0.18 m;
+            // data/nominal/case*.csv): the defaults admit it. A clinician
+            // narrows them to the person's passive range.
+            shoulder_elevation: Interval::new(-0.05, 2.0),
+            elbow_flexion: Interval::new(-0.35, 2.60),
             max_model_mismatch: 0.03,
             table_tolerance: 0.005,
             workspace_x: Interval::new(-0.10, 0.90),

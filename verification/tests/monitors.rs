@@ -43,14 +43,13 @@ fn req_mon_003_fast_grasp_point_stops() {
 #[test]
 fn req_mon_002_force_rate_jump_stops() {
     let mut kernel = estimating();
-    kernel.step(
-        &frame(0.01, Pose::default(), Wrench::new(0.0, 0.0, 0.0)),
-        0.01,
-    );
-    kernel.step(
-        &frame(0.02, Pose::default(), Wrench::new(30.0, 0.0, 0.0)),
-        0.02,
-    );
+    // A full rate window (50 ms) of a steady force, then a 30 N jump.
+    for i in 1..=6 {
+        let t = f64::from(i) * 0.01;
+        kernel.step(&frame(t, Pose::default(), Wrench::ZERO), t);
+    }
+    assert_eq!(stop_limit(&kernel), None);
+    kernel.step(&frame(0.07, Pose::default(), Wrench::new(30.0, 0.0, 0.0)), 0.07);
     assert_eq!(stop_limit(&kernel), Some(Limit::ForceRate));
 }
 

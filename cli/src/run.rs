@@ -1,0 +1,399 @@
+//! `limb run`: one whole kernel session on the reference plant, the
+//! embedded default (no robot, no setup).
+//!
+//! # Theory of operation
+//! The kernel, not a script, drives the session: each control period the
+//! plant's measurement goes into [`Kernel::step`] and the kernel's
+//! set-point drives the plant's Cartesian impedance for the next period.
+//! The runner only makes the operator's requests: start the estimation
+//! once the grasp is settled, approve a manipulation target once the kernel
+//! is in Validated, finish once the move is held. Every transition and
+//! refusal the kernel records is printed with its time and cause; the
+//! fitted model is compared with the plant's ground truth.
+//!
+//! Time: the kernel runs at `--rate` (1 kHz, the FRI rate, by default); the
+//! plant integrates at its own 0.5 ms step in between.
+
+use crate::error::{print_json, CliError};
+use limb_kernel::arm::JointAngles;
+use limb_kernel::geometry::Point;
+use limb_kernel::motion::SetPoint;
+use limb_kernel::trace::{Cause, Event, TraceEvent};
+use limb_kernel::{Command, Kernel, KernelConfig, PathSample, Request, StateKind};
+use serde::Serialize;
+
+/// A plant the kernel can close the loop on.
+pub trait ClosedLoopPlant {
+    /// Plant time [s].
+    fn time(&self) -> f64;
+    /// What a robot measures now: time stamp, grasp pose, wrench (frame S).
+    fn measure(&mut self) -> PathSample;
+    /// Advances the plant by `duration` seconds with the robot's impedance
+    /// following `set_point` (held when the kernel gives none).
+    fn advance(&mut self, set_point: Option<&SetPoint>, duration: f64);
+    /// Ground truth: l1, l2 [m], elbow at t = 0 and shoulder [m], frame S.
+    fn truth(&self) -> Truth;
+}
+
+/// Ground truth of the plant's arm.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Truth {
+    /// Upper-arm length [m].
+    pub l1: f64,
+    /// Forearm length [m].
+    pub l2: f64,
+    /// Elbow at t = 0 [m].
+    pub elbow: [f64; 2],
+    /// Shoulder [m].
+    pub shoulder: [f64; 2],
+}
+
+/// How the session is run.
+#[derive(Clone, Copy, Debug)]
+pub struct SessionPlan {
+    /// Kernel rate [Hz].
+    pub rate: f64,
+    /// Rest before the estimation starts [s].
+    pub settle: f64,
+    /// Manipulation target.
+    pub target: JointAngles,
+    /// How long the target is held before finishing [s].
+    pub hold: f64,
+    /// Give up after this long [s].
+    pub timeout: f64,
+}
+
+impl Default for SessionPlan {
+    fn default() -> Self {
+        Self {
+            rate: 1000.0,
+            settle: 0.1,
+            target: JointAngles {
+                shoulder_elevation: 1.0,
+                elbow_flexion: 0.6,
+            },
+            hold: 1.0,
+            timeout: 120.0,
+        }
+    }
+}
+
+/// One line of the session's record.
+#[derive(Clone, Debug, Serialize)]
+pub struct Line {
+    /// Kernel time [s].
+    pub time: f64,
+    /// What happened, in words.
+    pub what: String,
+}
+
+/// The fitted model against the truth.
+#[derive(Clone, Debug, Serialize)]
+pub struct ModelReport {
+    /// Fitted l1, l2 [m].
+    pub l1: f64,
+    /// Fitted forearm length [m].
+    pub l2: f64,
+    /// Fitted shoulder [m].
+    pub shoulder: [f64; 2],
+    /// Fitted elbow at t = 0 [m].
+    pub elbow: [f64; 2],
+    /// Errors: l1, l2 and shoulder distance [m].
+    pub error_l1: f64,
+    /// Error of l2 [m].
+    pub error_l2: f64,
+    /// Distance between fitted and true shoulder [m].
+    pub error_shoulder: f64,
+}
+
+/// The whole session.
+#[derive(Clone, Debug, Serialize)]
+pub struct SessionReport {
+    /// Transitions, refusals and requests, in order.
+    pub events: Vec<Line>,
+    /// Stops caused by a monitor, in words.
+    pub monitor_events: Vec<Line>,
+    /// The plant's truth.
+    pub truth: Truth,
+    /// The validated model, when one was made.
+    pub model: Option<ModelReport>,
+    /// State at the end.
+    pub final_state: StateKind,
+    /// True when the session went Grasp → … → Manipulate → Validated.
+    pub completed: bool,
+    /// Commands whose wrench or set-point was limited.
+    pub saturated_commands: u64,
+    /// Kernel steps taken.
+    pub steps: u64,
+}
+
+fn describe(event: &TraceEvent) -> String {
+    match event.event {
+        Event::Transition { from, to, cause } => {
+            let why = match cause {
+                Cause::Request(request) => format!("request {request:?}"),
+                Cause::ModelValidated => "model validated".into(),
+                Cause::Stop(reason) => format!("stop: {reason:?}"),
+            };
+            format!("{from:?} → {to:?} ({why})")
+        }
+        Event::Refused(refusal) => format!(
+            "refused {:?} in {:?}: {:?}",
+            refusal.request, refusal.state, refusal.reason
+        ),
+    }
+}
+
+/// Runs one session of `kernel` on `plant` following `plan`.
+pub fn run_session(
+    kernel: &mut Kernel,
+    plant: &mut dyn ClosedLoopPlant,
+    plan: &SessionPlan,
+) -> SessionReport {
+    let period = 1.0 / plan.rate;
+    let mut report = SessionReport {
+        events: Vec::new(),
+        monitor_events: Vec::new(),
+        truth: plant.truth(),
+        model: None,
+        final_state: StateKind::Grasp,
+        completed: false,
+        saturated_commands: 0,
+        steps: 0,
+    };
+    let mut asked_start = false;
+    let mut asked_approve = false;
+    let mut reached_target_at: Option<f64> = None;
+    let mut last: Option<Command> = None;
+    while plant.time() < plan.timeout {
+        let frame = plant.measure();
+        let now = frame.time;
+        let state = kernel.state().kind();
+        let request = match state {
+            StateKind::Grasp if !asked_start && now >= plan.settle => {
+                asked_start = true;
+                Some(Request::StartEstimation)
+            }
+            StateKind::Validated if !asked_approve => {
+                asked_approve = true;
+                report.model = kernel
+                    .state()
+                    .arm()
+                    .map(|arm| model_report(arm, &report.truth));
+                Some(Request::ApproveManipulation(plan.target))
+            }
+            StateKind::Manipulate => {
+                let still = last
+                    .and_then(|c| c.set_point)
+                    .is_some_and(|s| s.velocity.linear_speed() == 0.0 && s.velocity.psi == 0.0);
+                let since = *reached_target_at.get_or_insert(now);
+                if !still {
+                    reached_target_at = None;
+                }
+                (still && now - since >= plan.hold).then_some(Request::FinishManipulation)
+            }
+            _ => None,
+        };
+        if let Some(request) = request {
+            let _ = kernel.request(request, now);
+        }
+        let command = kernel.step(&frame, now);
+        report.steps += 1;
+        report.saturated_commands += u64::from(command.saturation.any());
+        while let Some(event) = kernel.pop_event() {
+            let line = Line {
+                time: event.time,
+                what: describe(&event),
+            };
+            if let Event::Transition {
+                cause: Cause::Stop(limb_kernel::StopReason::Monitor(_)),
+                ..
+            } = event.event
+            {
+                report.monitor_events.push(line.clone());
+            }
+            if let Event::Transition {
+                from: StateKind::Manipulate,
+                to: StateKind::Validated,
+                ..
+            } = event.event
+            {
+                report.completed = true;
+            }
+            report.events.push(line);
+        }
+        last = Some(command);
+        if report.completed || command.state == StateKind::SafeStop {
+            break;
+        }
+        plant.advance(command.set_point.as_ref(), period);
+    }
+    report.final_state = kernel.state().kind();
+    report
+}
+
+fn model_report(arm: &limb_kernel::validate::ValidatedArm, truth: &Truth) -> ModelReport {
+    let e = arm.estimate();
+    let g = arm.geometry();
+    let shoulder = g.shoulder();
+    ModelReport {
+        l1: g.upper_arm_length(),
+        l2: g.forearm_length(),
+        shoulder: [shoulder.x, shoulder.z],
+        elbow: [e.elbow.x, e.elbow.z],
+        error_l1: g.upper_arm_length() - truth.l1,
+        error_l2: g.forearm_length() - truth.l2,
+        error_shoulder: shoulder.distance(Point::new(truth.shoulder[0], truth.shoulder[1])),
+    }
+}
+
+/// Prints the report for a person.
+pub fn print_human(report: &SessionReport, header: &str) {
+    println!("{header}");
+    for line in &report.events {
+        println!("  {:>8.3} s  {}", line.time, line.what);
+    }
+    let t = &report.truth;
+    match &report.model {
+        Some(m) => println!(
+            "model: l1 {:.4} m (truth {:.4}, {:+.2} mm)  l2 {:.4} m (truth {:.4}, {:+.2} mm)  \
+             shoulder ({:.4}, {:.4}) m (truth ({:.4}, {:.4}), {:.2} mm off)",
+            m.l1,
+            t.l1,
+            m.error_l1 * 1e3,
+            m.l2,
+            t.l2,
+            m.error_l2 * 1e3,
+            m.shoulder[0],
+            m.shoulder[1],
+            t.shoulder[0],
+            t.shoulder[1],
+            m.error_shoulder * 1e3
+        ),
+        None => println!("model: none validated"),
+    }
+    if report.monitor_events.is_empty() {
+        println!("monitor events: none");
+    } else {
+        println!("monitor events:");
+        for line in &report.monitor_events {
+            println!("  {:>8.3} s  {}", line.time, line.what);
+        }
+    }
+    println!(
+        "final state: {:?} after {} kernel steps ({} with saturation); session {}",
+        report.final_state,
+        report.steps,
+        report.saturated_commands,
+        if report.completed {
+            "completed"
+        } else {
+            "ended early"
+        }
+    );
+}
+
+/// The reference plant of `limb-sim` behind [`ClosedLoopPlant`].
+pub struct ReferencePlant(pub limb_sim::Plant);
+
+impl ClosedLoopPlant for ReferencePlant {
+    fn time(&self) -> f64 {
+        self.0.time()
+    }
+
+    fn measure(&mut self) -> PathSample {
+        let m = self.0.measure();
+        PathSample {
+            time: m.time,
+            pose: m.pose,
+            wrench: m.wrench,
+        }
+    }
+
+    fn advance(&mut self, set_point: Option<&SetPoint>, duration: f64) {
+        if let Some(set_point) = set_point {
+            self.0.set(*set_point);
+        } else {
+            let held = self.0.set_point().pose;
+            self.0.set(SetPoint::hold(held));
+        }
+        let end = self.0.time() + duration - limb_sim::STEP / 2.0;
+        while self.0.time() < end {
+            self.0.step();
+        }
+    }
+
+    fn truth(&self) -> Truth {
+        let a = &self.0.params().arm;
+        let t = self.0.truth();
+        Truth {
+            l1: a.upper_arm_length,
+            l2: a.forearm_length,
+            elbow: [a.forearm_length, 0.0],
+            shoulder: [t.shoulder.x, t.shoulder.z],
+        }
+    }
+}
+
+/// `limb run`: the session on the reference plant.
+pub fn run(args: &RunArgs) -> Result<(), CliError> {
+    let config = config(args)?;
+    let mut params = limb_sim::PlantParameters::new(args.l1, args.l2);
+    params.seed = args.seed;
+    let plant = limb_sim::Plant::new(params).map_err(CliError::BadInput)?;
+    let mut plant = ReferencePlant(plant);
+    let mut kernel = Box::new(
+        Kernel::new(config)
+            .map_err(|e| CliError::BadInput(format!("kernel configuration: {e:?}")))?,
+    );
+    let plan = SessionPlan::default();
+    let report = run_session(&mut kernel, &mut plant, &plan);
+    let header = format!(
+        "limb run: reference plant, arm l1 = {:.3} m, l2 = {:.3} m, noise seed {}, kernel at {:.0} Hz, \
+         force limit {:.1} N",
+        args.l1, args.l2, args.seed, plan.rate, config.limits.max_force
+    );
+    output(&report, args, &header)
+}
+
+/// `limb run` options.
+#[derive(Debug, clap::Args)]
+pub struct RunArgs {
+    /// Upper-arm length of the simulated person [m].
+    #[arg(long, default_value_t = 0.30)]
+    pub l1: f64,
+    /// Forearm length (elbow to grasp) of the simulated person [m].
+    #[arg(long, default_value_t = 0.20)]
+    pub l2: f64,
+    /// Measurement-noise seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Overrides the kernel's force limit [N] (e.g. below the lift force, to see a safe stop).
+    #[arg(long)]
+    pub max_force: Option<f64>,
+    /// Print one JSON object instead of the human report.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// The kernel configuration for `args`, checked.
+pub fn config(args: &RunArgs) -> Result<KernelConfig, CliError> {
+    let mut config = KernelConfig::default();
+    if let Some(max_force) = args.max_force {
+        config.limits.max_force = max_force;
+    }
+    config
+        .check()
+        .map_err(|error| CliError::BadInput(format!("invalid kernel configuration: {error:?}")))?;
+    Ok(config)
+}
+
+/// Prints `report` as JSON or for a person.
+pub fn output(report: &SessionReport, args: &RunArgs, header: &str) -> Result<(), CliError> {
+    if args.json {
+        print_json(report)
+    } else {
+        print_human(report, header);
+        Ok(())
+    }
+}

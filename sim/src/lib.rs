@@ -1,0 +1,24 @@
+//! # limb-sim
+//!
+//! The reference plant of `../shared/spec/plant.md` (v1): a Cartesian
+//! impedance robot holding the wrist of a passive two-link arm that lies on
+//! a table, integrated with semi-implicit Euler at 0.5 ms, measured with
+//! seeded noise. This is "the sim" of the project: the kernel is developed
+//! against it and `limb run` closes the kernel's loop on it.
+//!
+//! Modules: [`params`] (arm and robot parameters, plant.md defaults),
+//! [`dynamics`] (M, C, g, J, J̇ q̇ of the arm), [`contact`] (the table's two
+//! unilateral constraints), [`plant`] (state, step, measurement),
+//! [`noise`] (the seeded Gaussian generator).
+
+#![forbid(unsafe_code)]
+
+pub mod contact;
+pub mod dynamics;
+pub mod noise;
+pub mod params;
+pub mod plant;
+pub mod scripted;
+
+pub use params::{ArmParameters, PlantParameters, RobotParameters};
+pub use plant::{Measurement, Plant, Truth, STEP};

@@ -1,0 +1,44 @@
+//! Seeded Gaussian noise: xorshift64* uniform draws and the Box–Muller
+//! transform. The same seed gives the same sequence on every platform.
+
+/// A deterministic Gaussian generator.
+#[derive(Clone, Debug)]
+pub struct Gaussian {
+    state: u64,
+    spare: Option<f64>,
+}
+
+impl Gaussian {
+    /// A generator for `seed` (any value; zero is remapped).
+    pub fn new(seed: u64) -> Self {
+        Self {
+            state: seed ^ 0x9E37_79B9_7F4A_7C15 | 1,
+            spare: None,
+        }
+    }
+
+    fn uniform(&mut self) -> f64 {
+        let mut x = self.state;
+        x ^= x >> 12;
+        x ^= x << 25;
+        x ^= x >> 27;
+        self.state = x;
+        // 53 random bits in (0, 1].
+        ((x.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 + 1.0) / (1u64 << 53) as f64
+    }
+
+    /// One draw from N(0, sigma²).
+    pub fn sample(&mut self, sigma: f64) -> f64 {
+        let unit = match self.spare.take() {
+            Some(z) => z,
+            None => {
+                let (u1, u2) = (self.uniform(), self.uniform());
+                let r = (-2.0 * u1.ln()).sqrt();
+                let angle = 2.0 * std::f64::consts::PI * u2;
+                self.spare = Some(r * angle.sin());
+                r * angle.cos()
+            }
+        };
+        sigma * unit
+    }
+}
