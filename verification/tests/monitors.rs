@@ -49,7 +49,10 @@ fn req_mon_002_force_rate_jump_stops() {
         kernel.step(&frame(t, Pose::default(), Wrench::ZERO), t);
     }
     assert_eq!(stop_limit(&kernel), None);
-    kernel.step(&frame(0.07, Pose::default(), Wrench::new(30.0, 0.0, 0.0)), 0.07);
+    kernel.step(
+        &frame(0.07, Pose::default(), Wrench::new(30.0, 0.0, 0.0)),
+        0.07,
+    );
     assert_eq!(stop_limit(&kernel), Some(Limit::ForceRate));
 }
 
