@@ -3,9 +3,12 @@
 //! its own module and returns a [`CliError`] that maps to the exit code.
 
 mod error;
+mod estimate;
+mod robot_log;
 
 use clap::{Parser, Subcommand};
 use error::CliError;
+use std::path::PathBuf;
 
 #[derive(Parser)]
 #[command(
@@ -19,11 +22,25 @@ struct Cli {
 }
 
 #[derive(Subcommand)]
-enum Command {}
+enum Command {
+    /// Fit the arm (l1, l2, elbow, shoulder) from an estimation-motion log.
+    Estimate {
+        /// Log in the CSV format of plant.md.
+        log: PathBuf,
+        /// Estimator.
+        #[arg(long, value_enum, default_value = "auto")]
+        method: estimate::MethodArg,
+        /// Print one JSON object on stdout.
+        #[arg(long)]
+        json: bool,
+    },
+}
 
 fn main() {
     let cli = Cli::parse();
-    let result: Result<(), CliError> = match cli.command {};
+    let result: Result<(), CliError> = match cli.command {
+        Command::Estimate { log, method, json } => estimate::run(&log, method, json),
+    };
     if let Err(error) = result {
         eprintln!("limb: {error}");
         std::process::exit(error.exit_code());

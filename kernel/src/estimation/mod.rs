@@ -12,11 +12,20 @@
 //! [`crate::path::PATH_CAPACITY`] samples and every loop is over it.
 
 mod circle;
+mod geometric;
+mod hough;
+mod phase;
 
-pub use circle::{fit_circle_kasa, Circle, CircleFitError};
+pub use circle::{fit_circle_kasa, fit_circle_taubin, Circle, CircleFitError};
+pub use geometric::{
+    fit_circle_geometric, FitPoint, FreeCorrections, GeometricFit, GraspCorrection, ROBUST_SCALE,
+};
+pub use hough::{hough_circle_chords, hough_circle_normals};
+pub use phase::{detect_phases, Phases};
 
 use crate::geometry::Point;
 use crate::path::{PathSample, PATH_CAPACITY};
+use core::ops::Range;
 
 /// Which estimator to use.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -92,12 +101,87 @@ pub enum EstimateError {
 /// Minimum samples a phase needs for a fit.
 pub const MIN_PHASE_SAMPLES: usize = 10;
 
-/// Forearm elevation that ends phase 1 in this first-pass phase split [rad].
-const PHASE_ONE_END_PSI: f64 = 1.2;
-/// Grasp height that starts phase 1 [m]: the forearm has left the table.
-const LIFT_OFF_HEIGHT: f64 = 0.002;
-/// Elbow height that starts phase 2 [m]: the upper arm has left the table.
-const ELBOW_LIFT_OFF_HEIGHT: f64 = 0.005;
+/// How a path sample becomes a point of a fit: the grasp point
+/// (`forearm_length` = 0) or the elbow, eq. 19-21 in frame S:
+/// E = G + l2 (cos psi, −sin psi), with optional grasp corrections.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PointModel {
+    /// Distance from the grasp to the point along the forearm [m].
+    pub forearm_length: f64,
+    /// Grasp corrections applied to every point.
+    pub correction: GraspCorrection,
+    /// Path index from which the grasp has slipped (`usize::MAX`: never).
+    pub slip_index: usize,
+}
+
+impl PointModel {
+    /// The grasp point itself, uncorrected.
+    pub const GRASP: PointModel = PointModel {
+        forearm_length: 0.0,
+        correction: GraspCorrection {
+            compliance: 0.0,
+            slip: 0.0,
+        },
+        slip_index: usize::MAX,
+    };
+
+    /// The same corrections, stepping `forearm_length` along the forearm.
+    pub const fn along_forearm(self, forearm_length: f64) -> PointModel {
+        PointModel {
+            forearm_length,
+            ..self
+        }
+    }
+
+    /// The point of path sample `index` with its correction derivatives,
+    /// before the corrections are applied.
+    pub fn fit_point(&self, index: usize, sample: &PathSample) -> FitPoint {
+        let forearm = Point::new(libm::cos(sample.pose.psi), -libm::sin(sample.pose.psi));
+        FitPoint {
+            base: Point::new(
+                sample.pose.x + self.forearm_length * forearm.x,
+                sample.pose.z + self.forearm_length * forearm.z,
+            ),
+            force: Point::new(sample.wrench.fx, sample.wrench.fz),
+            slip_direction: if index >= self.slip_index {
+                forearm
+            } else {
+                Point::default()
+            },
+        }
+    }
+
+    /// Fit points of `path[range]` (empty where the range is out of bounds).
+    pub fn fit_points<'a>(
+        &'a self,
+        path: &'a [PathSample],
+        range: Range<usize>,
+    ) -> impl Iterator<Item = FitPoint> + Clone + 'a {
+        let first = range.start;
+        path.get(range)
+            .unwrap_or(&[])
+            .iter()
+            .enumerate()
+            .map(move |(offset, sample)| self.fit_point(first + offset, sample))
+    }
+
+    /// Corrected points of `path[range]`.
+    pub fn points<'a>(
+        &'a self,
+        path: &'a [PathSample],
+        range: Range<usize>,
+    ) -> impl Iterator<Item = Point> + Clone + 'a {
+        self.fit_points(path, range)
+            .map(move |p| p.at(self.correction))
+    }
+}
+
+/// The two circles of an estimate and the model that produced the elbow path.
+struct PhaseFits {
+    forearm: Circle,
+    upper_arm: Circle,
+    elbow_path: PointModel,
+}
 
 /// Estimates the arm from the recorded grasp path with `method`.
 ///
@@ -113,67 +197,117 @@ pub fn estimate_arm(path: &[PathSample], method: Method) -> Result<ArmEstimate, 
     {
         return Err(EstimateError::NonFiniteSample);
     }
-    let mut points = [Point::default(); PATH_CAPACITY];
-    // Phase 1: from lift-off until the forearm is well up.
-    let mut n = 0;
-    for sample in path {
-        if sample.pose.psi >= PHASE_ONE_END_PSI {
-            break;
+    let phases = detect_phases(path, &PointModel::GRASP)?;
+    let (fits, method_disagreement) = match method {
+        Method::Ls => (fit_ls(path, &phases, PointModel::GRASP)?, None),
+        Method::Hough => (fit_hough(path, &phases, PointModel::GRASP)?, None),
+        Method::Auto => {
+            let best = fit_robust(path, &phases)?;
+            let grasp = best.elbow_path.along_forearm(0.0);
+            let disagreement = fit_hough(path, &phases, grasp).ok().map(|hough| {
+                libm::fabs(hough.forearm.radius - best.forearm.radius)
+                    .max(libm::fabs(hough.upper_arm.radius - best.upper_arm.radius))
+            });
+            (best, disagreement)
         }
-        if sample.pose.z > LIFT_OFF_HEIGHT {
-            points[n] = sample.pose.point();
-            n += 1;
-        }
-    }
-    if n < MIN_PHASE_SAMPLES {
-        return Err(EstimateError::ForearmPhaseTooShort);
-    }
-    let forearm = fit_circle_kasa(&points[..n]).map_err(EstimateError::ForearmFit)?;
-    let forearm_arc = arc_about(&points[..n], forearm.centre);
-    let (forearm_samples, forearm_residual) = (n, forearm.rms_residual(&points[..n]));
-    // Phase 2: elbow path (eq. 19-21) once the elbow has left the table.
-    let l2 = forearm.radius;
-    n = 0;
-    for sample in path {
-        let elbow = Point::new(
-            sample.pose.x + l2 * libm::cos(sample.pose.psi),
-            sample.pose.z - l2 * libm::sin(sample.pose.psi),
-        );
-        if elbow.z > ELBOW_LIFT_OFF_HEIGHT {
-            points[n] = elbow;
-            n += 1;
-        }
-    }
-    if n < MIN_PHASE_SAMPLES {
-        return Err(EstimateError::UpperArmPhaseTooShort);
-    }
-    let upper_arm = fit_circle_kasa(&points[..n]).map_err(EstimateError::UpperArmFit)?;
+    };
+    let grasp = fits.elbow_path.along_forearm(0.0);
+    let forearm_points = || grasp.points(path, phases.forearm.clone());
+    let elbow_points = || fits.elbow_path.points(path, phases.upper_arm.clone());
     Ok(ArmEstimate {
-        upper_arm_length: upper_arm.radius,
-        forearm_length: l2,
-        elbow: forearm.centre,
-        shoulder: upper_arm.centre,
+        upper_arm_length: fits.upper_arm.radius,
+        forearm_length: fits.forearm.radius,
+        elbow: fits.forearm.centre,
+        shoulder: fits.upper_arm.centre,
         method,
         evidence: FitEvidence {
-            forearm_arc,
-            upper_arm_arc: arc_about(&points[..n], upper_arm.centre),
-            forearm_residual,
-            upper_arm_residual: upper_arm.rms_residual(&points[..n]),
-            method_disagreement: None,
-            forearm_samples,
-            upper_arm_samples: n,
+            forearm_arc: fits.forearm.arc(forearm_points()),
+            upper_arm_arc: fits.upper_arm.arc(elbow_points()),
+            forearm_residual: fits.forearm.rms_residual(forearm_points()),
+            upper_arm_residual: fits.upper_arm.rms_residual(elbow_points()),
+            method_disagreement,
+            forearm_samples: phases.forearm.len(),
+            upper_arm_samples: phases.upper_arm.len(),
         },
     })
 }
 
-/// Angle between the first and last point seen from `centre` [rad, 0..π].
-fn arc_about(points: &[Point], centre: Point) -> f64 {
-    match (points.first(), points.last()) {
-        (Some(a), Some(b)) => {
-            let (ax, az) = (a.x - centre.x, a.z - centre.z);
-            let (bx, bz) = (b.x - centre.x, b.z - centre.z);
-            libm::fabs(libm::atan2(ax * bz - az * bx, ax * bx + az * bz))
+/// The paper's least squares (eq. 22-28): Kåsa on both phases.
+fn fit_ls(
+    path: &[PathSample],
+    phases: &Phases,
+    grasp: PointModel,
+) -> Result<PhaseFits, EstimateError> {
+    let forearm = fit_circle_kasa(grasp.points(path, phases.forearm.clone()))
+        .map_err(EstimateError::ForearmFit)?;
+    let elbow_path = grasp.along_forearm(forearm.radius);
+    let upper_arm = fit_circle_kasa(elbow_path.points(path, phases.upper_arm.clone()))
+        .map_err(EstimateError::UpperArmFit)?;
+    Ok(PhaseFits {
+        forearm,
+        upper_arm,
+        elbow_path,
+    })
+}
+
+/// The bounded Hough transform on both phases (see [`hough`]).
+fn fit_hough(
+    path: &[PathSample],
+    phases: &Phases,
+    grasp: PointModel,
+) -> Result<PhaseFits, EstimateError> {
+    let sample_at = |first: usize, model: PointModel| {
+        move |offset: usize| {
+            let index = first.checked_add(offset)?;
+            let sample = path.get(index)?;
+            Some((
+                model.fit_point(index, sample).at(model.correction),
+                sample.pose.psi,
+            ))
         }
-        _ => 0.0,
-    }
+    };
+    let forearm =
+        hough_circle_normals(phases.forearm.len(), sample_at(phases.forearm.start, grasp))
+            .map_err(EstimateError::ForearmFit)?;
+    let elbow_path = grasp.along_forearm(forearm.radius);
+    let elbow_at = sample_at(phases.upper_arm.start, elbow_path);
+    let upper_arm = hough_circle_chords(phases.upper_arm.len(), |offset| {
+        elbow_at(offset).map(|(p, _)| p)
+    })
+    .map_err(EstimateError::UpperArmFit)?;
+    Ok(PhaseFits {
+        forearm,
+        upper_arm,
+        elbow_path,
+    })
+}
+
+/// The project's best fit: Taubin start, robust geometric refinement.
+fn fit_robust(path: &[PathSample], phases: &Phases) -> Result<PhaseFits, EstimateError> {
+    let grasp = PointModel::GRASP;
+    let free = FreeCorrections::default();
+    let start = fit_circle_taubin(grasp.points(path, phases.forearm.clone()))
+        .map_err(EstimateError::ForearmFit)?;
+    let forearm = fit_circle_geometric(
+        grasp.fit_points(path, phases.forearm.clone()),
+        start,
+        grasp.correction,
+        free,
+    )
+    .map_err(EstimateError::ForearmFit)?;
+    let elbow_path = grasp.along_forearm(forearm.circle.radius);
+    let start = fit_circle_taubin(elbow_path.points(path, phases.upper_arm.clone()))
+        .map_err(EstimateError::UpperArmFit)?;
+    let upper_arm = fit_circle_geometric(
+        elbow_path.fit_points(path, phases.upper_arm.clone()),
+        start,
+        elbow_path.correction,
+        free,
+    )
+    .map_err(EstimateError::UpperArmFit)?;
+    Ok(PhaseFits {
+        forearm: forearm.circle,
+        upper_arm: upper_arm.circle,
+        elbow_path,
+    })
 }

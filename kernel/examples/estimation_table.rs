@@ -1,0 +1,81 @@
+//! Regenerates the estimator accuracy tables of
+//! `kernel/src/estimation/README.md`:
+//!
+//! ```text
+//! cargo run -p limb-kernel --release --example estimation_table
+//! ```
+//!
+//! Errors are estimate − truth in mm; truth from plant.md Table 1 /
+//! `labels.json` and the logged shoulder (ground truth, used only here).
+
+#[path = "../tests/support/logs.rs"]
+mod logs;
+
+use limb_kernel::estimation::{estimate_arm, Method};
+
+const METHODS: [(Method, &str); 3] = [
+    (Method::Hough, "hough"),
+    (Method::Ls, "ls"),
+    (Method::Auto, "auto"),
+];
+
+fn row(name: &str, log: &logs::Log, l1: f64, l2: f64) {
+    let mut cells = Vec::new();
+    for (method, _) in METHODS {
+        cells.push(match estimate_arm(&log.path, method) {
+            Ok(e) => {
+                let shoulder = log
+                    .shoulder
+                    .map_or(f64::NAN, |s| e.shoulder.distance(s) * 1e3);
+                format!(
+                    "{:+.2} / {:+.2} / {:.2}",
+                    (e.upper_arm_length - l1) * 1e3,
+                    (e.forearm_length - l2) * 1e3,
+                    shoulder
+                )
+            }
+            Err(error) => format!("{error:?}"),
+        });
+    }
+    println!("| {name} | {} |", cells.join(" | "));
+}
+
+fn main() {
+    let header = METHODS
+        .map(|(_, name)| format!("{name}: l1 / l2 / shoulder"))
+        .join(" | ");
+    println!("Six noisy benchmark logs (errors in mm):\n\n| log | {header} |\n|---|---|---|---|");
+    for case in 1..=6 {
+        let (l1, l2) = logs::case_lengths(case);
+        row(
+            &format!("noisy/case{case}"),
+            &logs::read(&format!("noisy/case{case}.csv")),
+            l1,
+            l2,
+        );
+    }
+    println!("\nLabelled effect logs (errors in mm):\n\n| log | {header} |\n|---|---|---|---|");
+    let labels =
+        std::fs::read_to_string(format!("{}/effects/labels.json", logs::DATA)).expect("labels");
+    for entry in labels.split("\n {").skip(1) {
+        let field = |key: &str| {
+            let start = entry.find(&format!("\"{key}\":")).expect("key") + key.len() + 3;
+            entry[start..]
+                .split([',', '\n'])
+                .next()
+                .expect("value")
+                .trim()
+                .trim_matches('"')
+                .to_string()
+        };
+        let case: usize = field("case").parse().expect("case");
+        let (l1, l2) = logs::case_lengths(case);
+        let file = field("file");
+        row(
+            &field("effect"),
+            &logs::read(&format!("effects/{file}")),
+            l1,
+            l2,
+        );
+    }
+}

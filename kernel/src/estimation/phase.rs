@@ -1,0 +1,106 @@
+//! Phase detection from the logged grasp path (no ground truth).
+//!
+//! # Theory of operation
+//! Phase 1 starts at lift-off, the first sample whose forearm elevation
+//! exceeds [`LIFT_PSI`]. While the elbow rests on the table the grasp point
+//! stays on a circle about it; phase 1 ends where the grasp point leaves
+//! that circle. The circle is not known in advance, so the split is found by
+//! a fixed number of rounds ([`ROUNDS`]): fit (Taubin) a circle to the
+//! current phase-1 samples (initially lift-off up to psi = [`INITIAL_PSI`]),
+//! scan forward for the first run of [`DEPARTURE_RUN`] samples whose radial
+//! residual exceeds [`DEPARTURE_TOLERANCE`], and end phase 1 just after the
+//! last sample before that run whose residual was within
+//! [`SETTLED_TOLERANCE`]. Phase 2 (the upper arm turning about the shoulder)
+//! is every sample from there to the end of the path.
+//!
+//! Work: [`ROUNDS`] × (one fit, two passes, and one scan) over the path,
+//! O(n); memory O(1).
+
+use super::circle::fit_circle_taubin;
+use super::{EstimateError, PointModel, MIN_PHASE_SAMPLES};
+use crate::path::PathSample;
+use core::ops::Range;
+
+/// Forearm elevation that marks lift-off [rad]: 50 × the psi noise of
+/// `plant.md` (1 mrad), so a resting arm never triggers it.
+pub const LIFT_PSI: f64 = 0.05;
+/// Forearm elevation ending the first guess of phase 1 [rad]. On the six
+/// arms of `plant.md` the elbow lifts at psi ≈ 1.35-1.47 rad; a wrong guess
+/// only costs a round.
+pub const INITIAL_PSI: f64 = 0.5;
+/// Radial residual that counts as having left the phase-1 circle [m]:
+/// 10 × the position noise of `plant.md`.
+pub const DEPARTURE_TOLERANCE: f64 = 1.0e-3;
+/// Consecutive samples beyond [`DEPARTURE_TOLERANCE`] that confirm the
+/// departure (0.1 s at 100 Hz): single outliers do not end phase 1.
+pub const DEPARTURE_RUN: usize = 10;
+/// Residual of the last phase-1 sample before the departure [m]: 3σ of the
+/// position noise.
+pub const SETTLED_TOLERANCE: f64 = 0.3e-3;
+/// Fit-and-scan rounds; the split is stable after the second on every log.
+pub const ROUNDS: usize = 3;
+
+/// The two phases of the estimation motion, as index ranges of the path.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Phases {
+    /// Forearm turning about the resting elbow.
+    pub forearm: Range<usize>,
+    /// Upper arm turning about the shoulder.
+    pub upper_arm: Range<usize>,
+}
+
+/// Splits `path` into its two phases, reading grasp points through `grasp`
+/// (which may correct them).
+///
+/// # Errors
+/// [`EstimateError::ForearmPhaseTooShort`] when there is no lift-off or
+/// phase 1 has fewer than [`MIN_PHASE_SAMPLES`];
+/// [`EstimateError::UpperArmPhaseTooShort`] when the grasp never leaves the
+/// phase-1 circle or phase 2 is too short; a failed phase-1 fit.
+pub fn detect_phases(path: &[PathSample], grasp: &PointModel) -> Result<Phases, EstimateError> {
+    let lift = path
+        .iter()
+        .position(|s| s.pose.psi > LIFT_PSI)
+        .ok_or(EstimateError::ForearmPhaseTooShort)?;
+    let mut end = path
+        .iter()
+        .skip(lift)
+        .position(|s| s.pose.psi > INITIAL_PSI)
+        .map_or(path.len(), |offset| lift + offset);
+    for _ in 0..ROUNDS {
+        if end.saturating_sub(lift) < MIN_PHASE_SAMPLES {
+            return Err(EstimateError::ForearmPhaseTooShort);
+        }
+        let circle =
+            fit_circle_taubin(grasp.points(path, lift..end)).map_err(EstimateError::ForearmFit)?;
+        let mut run = 0;
+        let mut settled = lift;
+        let mut departure = None;
+        for (index, point) in grasp.points(path, lift..path.len()).enumerate() {
+            let residual = libm::fabs(point.distance(circle.centre) - circle.radius);
+            if residual > DEPARTURE_TOLERANCE {
+                run += 1;
+                if run == DEPARTURE_RUN {
+                    departure = Some(settled);
+                    break;
+                }
+            } else {
+                run = 0;
+                if residual <= SETTLED_TOLERANCE {
+                    settled = lift + index + 1;
+                }
+            }
+        }
+        end = departure.ok_or(EstimateError::UpperArmPhaseTooShort)?;
+    }
+    if end.saturating_sub(lift) < MIN_PHASE_SAMPLES {
+        return Err(EstimateError::ForearmPhaseTooShort);
+    }
+    if path.len().saturating_sub(end) < MIN_PHASE_SAMPLES {
+        return Err(EstimateError::UpperArmPhaseTooShort);
+    }
+    Ok(Phases {
+        forearm: lift..end,
+        upper_arm: end..path.len(),
+    })
+}
