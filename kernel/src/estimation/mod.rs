@@ -13,15 +13,18 @@
 
 mod circle;
 mod geometric;
+mod grasp;
 mod hough;
 mod phase;
 
 pub use circle::{fit_circle_kasa, fit_circle_taubin, Circle, CircleFitError};
-pub use geometric::{
-    fit_circle_geometric, FitPoint, FreeCorrections, GeometricFit, GraspCorrection, ROBUST_SCALE,
+pub use geometric::fit_circle_geometric;
+pub use grasp::{
+    detect_compliance, detect_slip, fit_forearm_pose, FitPoint, ForearmPose, FreeCorrections,
+    GraspCorrection,
 };
 pub use hough::{hough_circle_chords, hough_circle_normals};
-pub use phase::{detect_phases, Phases};
+pub use phase::{detect_phases, detect_phases_from, Phases};
 
 use crate::geometry::Point;
 use crate::path::{PathSample, PATH_CAPACITY};
@@ -120,7 +123,8 @@ impl PointModel {
         forearm_length: 0.0,
         correction: GraspCorrection {
             compliance: 0.0,
-            slip: 0.0,
+            slide: 0.0,
+            offset: Point::new(0.0, 0.0),
         },
         slip_index: usize::MAX,
     };
@@ -143,11 +147,8 @@ impl PointModel {
                 sample.pose.z + self.forearm_length * forearm.z,
             ),
             force: Point::new(sample.wrench.fx, sample.wrench.fz),
-            slip_direction: if index >= self.slip_index {
-                forearm
-            } else {
-                Point::default()
-            },
+            forearm,
+            slipped: index >= self.slip_index,
         }
     }
 
@@ -197,18 +198,25 @@ pub fn estimate_arm(path: &[PathSample], method: Method) -> Result<ArmEstimate, 
     {
         return Err(EstimateError::NonFiniteSample);
     }
-    let phases = detect_phases(path, &PointModel::GRASP)?;
-    let (fits, method_disagreement) = match method {
-        Method::Ls => (fit_ls(path, &phases, PointModel::GRASP)?, None),
-        Method::Hough => (fit_hough(path, &phases, PointModel::GRASP)?, None),
+    let (phases, fits, method_disagreement) = match method {
+        Method::Ls => {
+            let phases = detect_phases(path, &PointModel::GRASP)?;
+            let fits = fit_ls(path, &phases, PointModel::GRASP)?;
+            (phases, fits, None)
+        }
+        Method::Hough => {
+            let phases = detect_phases(path, &PointModel::GRASP)?;
+            let fits = fit_hough(path, &phases, PointModel::GRASP)?;
+            (phases, fits, None)
+        }
         Method::Auto => {
-            let best = fit_robust(path, &phases)?;
+            let (phases, best) = fit_robust(path)?;
             let grasp = best.elbow_path.along_forearm(0.0);
             let disagreement = fit_hough(path, &phases, grasp).ok().map(|hough| {
                 libm::fabs(hough.forearm.radius - best.forearm.radius)
                     .max(libm::fabs(hough.upper_arm.radius - best.upper_arm.radius))
             });
-            (best, disagreement)
+            (phases, best, disagreement)
         }
     };
     let grasp = fits.elbow_path.along_forearm(0.0);
@@ -282,32 +290,52 @@ fn fit_hough(
     })
 }
 
-/// The project's best fit: Taubin start, robust geometric refinement.
-fn fit_robust(path: &[PathSample], phases: &Phases) -> Result<PhaseFits, EstimateError> {
-    let grasp = PointModel::GRASP;
-    let free = FreeCorrections::default();
-    let start = fit_circle_taubin(grasp.points(path, phases.forearm.clone()))
-        .map_err(EstimateError::ForearmFit)?;
-    let forearm = fit_circle_geometric(
-        grasp.fit_points(path, phases.forearm.clone()),
-        start,
-        grasp.correction,
-        free,
-    )
-    .map_err(EstimateError::ForearmFit)?;
-    let elbow_path = grasp.along_forearm(forearm.circle.radius);
-    let start = fit_circle_taubin(elbow_path.points(path, phases.upper_arm.clone()))
+/// The grasp model of a log: compliance and slip detected from the data
+/// (see [`grasp`]), and the phases under that model.
+fn grasp_model(path: &[PathSample]) -> Result<(Phases, PointModel), EstimateError> {
+    let mut model = PointModel::GRASP;
+    let mut phases = detect_phases(path, &model)?;
+    model.correction.compliance = detect_compliance(path, phases.forearm.clone())?;
+    if model.correction.compliance != 0.0 {
+        phases = detect_phases(path, &model)?;
+    }
+    if let Some(slipped) = detect_slip(path, &phases, &model)? {
+        model = slipped;
+        phases = detect_phases(path, &model)?;
+    }
+    Ok((phases, model))
+}
+
+/// The project's best fit: phase 1 by the robust forearm-pose model (grasp
+/// points, psi and wrench, with compliance and slip corrected, see
+/// [`grasp`]), phase 2 by a Taubin start and a robust geometric refinement
+/// on the corrected elbow path.
+fn fit_robust(path: &[PathSample]) -> Result<(Phases, PhaseFits), EstimateError> {
+    let (phases, grasp) = grasp_model(path)?;
+    let pose = fit_forearm_pose(
+        path,
+        phases.forearm.clone(),
+        &grasp,
+        FreeCorrections::default(),
+    )?;
+    let forearm = Circle {
+        centre: pose.elbow,
+        radius: pose.forearm_length,
+    };
+    let elbow_path = grasp.along_forearm(forearm.radius);
+    let upper_arm = robust_circle(elbow_path.points(path, phases.upper_arm.clone()))
         .map_err(EstimateError::UpperArmFit)?;
-    let upper_arm = fit_circle_geometric(
-        elbow_path.fit_points(path, phases.upper_arm.clone()),
-        start,
-        elbow_path.correction,
-        free,
-    )
-    .map_err(EstimateError::UpperArmFit)?;
-    Ok(PhaseFits {
-        forearm: forearm.circle,
-        upper_arm: upper_arm.circle,
-        elbow_path,
-    })
+    Ok((
+        phases,
+        PhaseFits {
+            forearm,
+            upper_arm,
+            elbow_path,
+        },
+    ))
+}
+
+/// Taubin start, robust geometric refinement.
+fn robust_circle<I: Iterator<Item = Point> + Clone>(points: I) -> Result<Circle, CircleFitError> {
+    fit_circle_geometric(points.clone(), fit_circle_taubin(points)?)
 }

@@ -10,7 +10,8 @@
 //! scan forward for the first run of [`DEPARTURE_RUN`] samples whose radial
 //! residual exceeds [`DEPARTURE_TOLERANCE`], and end phase 1 just after the
 //! last sample before that run whose residual was within
-//! [`SETTLED_TOLERANCE`]. Phase 2 (the upper arm turning about the shoulder)
+//! [`SETTLED_TOLERANCE`] (both tolerances grow to [`NOISE_MULTIPLE`] × and
+//! 1 × the fit's RMS residual on noisier data). Phase 2 (the upper arm turning about the shoulder)
 //! is every sample from there to the end of the path.
 //!
 //! Work: [`ROUNDS`] × (one fit, two passes, and one scan) over the path,
@@ -37,6 +38,10 @@ pub const DEPARTURE_RUN: usize = 10;
 /// Residual of the last phase-1 sample before the departure [m]: 3σ of the
 /// position noise.
 pub const SETTLED_TOLERANCE: f64 = 0.3e-3;
+/// On noisier data (e.g. coarse quantisation) the tolerances grow with the
+/// RMS residual of the current fit: departure at this many RMS, settled at
+/// one RMS.
+pub const NOISE_MULTIPLE: f64 = 4.0;
 /// Fit-and-scan rounds; the split is stable after the second on every log.
 pub const ROUNDS: usize = 3;
 
@@ -62,10 +67,28 @@ pub fn detect_phases(path: &[PathSample], grasp: &PointModel) -> Result<Phases, 
         .iter()
         .position(|s| s.pose.psi > LIFT_PSI)
         .ok_or(EstimateError::ForearmPhaseTooShort)?;
+    detect_phases_from(path, grasp, lift)
+}
+
+/// [`detect_phases`] with phase 1 starting at path index `lift`; the first
+/// guess of phase 1 ends where psi has grown by [`INITIAL_PSI`] − [`LIFT_PSI`].
+///
+/// # Errors
+/// As [`detect_phases`].
+pub fn detect_phases_from(
+    path: &[PathSample],
+    grasp: &PointModel,
+    lift: usize,
+) -> Result<Phases, EstimateError> {
+    let start_psi = path
+        .get(lift)
+        .ok_or(EstimateError::ForearmPhaseTooShort)?
+        .pose
+        .psi;
     let mut end = path
         .iter()
         .skip(lift)
-        .position(|s| s.pose.psi > INITIAL_PSI)
+        .position(|s| s.pose.psi > start_psi + (INITIAL_PSI - LIFT_PSI))
         .map_or(path.len(), |offset| lift + offset);
     for _ in 0..ROUNDS {
         if end.saturating_sub(lift) < MIN_PHASE_SAMPLES {
@@ -73,12 +96,15 @@ pub fn detect_phases(path: &[PathSample], grasp: &PointModel) -> Result<Phases, 
         }
         let circle =
             fit_circle_taubin(grasp.points(path, lift..end)).map_err(EstimateError::ForearmFit)?;
+        let noise = circle.rms_residual(grasp.points(path, lift..end));
+        let departure_tolerance = DEPARTURE_TOLERANCE.max(NOISE_MULTIPLE * noise);
+        let settled_tolerance = SETTLED_TOLERANCE.max(noise);
         let mut run = 0;
         let mut settled = lift;
         let mut departure = None;
         for (index, point) in grasp.points(path, lift..path.len()).enumerate() {
             let residual = libm::fabs(point.distance(circle.centre) - circle.radius);
-            if residual > DEPARTURE_TOLERANCE {
+            if residual > departure_tolerance {
                 run += 1;
                 if run == DEPARTURE_RUN {
                     departure = Some(settled);
@@ -86,7 +112,7 @@ pub fn detect_phases(path: &[PathSample], grasp: &PointModel) -> Result<Phases, 
                 }
             } else {
                 run = 0;
-                if residual <= SETTLED_TOLERANCE {
+                if residual <= settled_tolerance {
                     settled = lift + index + 1;
                 }
             }
