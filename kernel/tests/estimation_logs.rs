@@ -55,3 +55,42 @@ fn hough_and_ls_are_within_a_millimetre_on_the_six_noisy_logs() {
         }
     }
 }
+
+/// Outliers (every 37th sample thrown 5 cm off) and a short corrupted
+/// stretch (0.2 s, 10 cm off, in either phase) move the `Auto` estimate by
+/// less than 3 mm.
+#[test]
+fn outliers_and_a_corrupted_stretch_move_auto_by_less_than_three_mm() {
+    let log = logs::read("noisy/case3.csv");
+    let clean = estimate_arm(&log.path, Method::Auto).expect("clean");
+    let corrupt = |keep: &dyn Fn(usize) -> bool, dx: f64, dz: f64| {
+        let mut path = log.path.clone();
+        for (index, sample) in path.iter_mut().enumerate() {
+            if !keep(index) {
+                sample.pose.x += dx;
+                sample.pose.z += dz;
+            }
+        }
+        path
+    };
+    let cases = [
+        ("outliers", corrupt(&|i| i % 37 != 0, 0.05, -0.03)),
+        (
+            "stretch in phase 1",
+            corrupt(&|i| !(800..820).contains(&i), 0.0, 0.1),
+        ),
+        (
+            "stretch in phase 2",
+            corrupt(&|i| !(1800..1820).contains(&i), 0.0, 0.1),
+        ),
+    ];
+    for (name, path) in cases {
+        let e = estimate_arm(&path, Method::Auto).unwrap_or_else(|err| panic!("{name}: {err:?}"));
+        let moved = (e.upper_arm_length - clean.upper_arm_length)
+            .abs()
+            .max((e.forearm_length - clean.forearm_length).abs())
+            .max(e.shoulder.distance(clean.shoulder))
+            .max(e.elbow.distance(clean.elbow));
+        assert!(moved < 3e-3, "{name}: moved {moved} m: {e:?}");
+    }
+}

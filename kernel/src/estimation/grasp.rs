@@ -111,6 +111,8 @@ pub struct ForearmPose {
     pub correction: GraspCorrection,
     /// RMS distance of the corrected elbow points from E0 [m].
     pub rms: f64,
+    /// Cauchy scale of the next reweighting round [m].
+    pub robust_scale: f64,
 }
 
 /// Fits the forearm-pose model to `path[range]`; corrections not in `free`
@@ -140,7 +142,17 @@ pub fn fit_forearm_pose(
         if !rms.is_finite() {
             return Err(EstimateError::ForearmFit(CircleFitError::NonFinite));
         }
-        pose = Some(ForearmPose { rms, ..next });
+        // The first round is unweighted: its scale comes from the plain RMS.
+        let robust_scale = if pose.is_none() {
+            ROBUST_SCALE.max(NOISE_MULTIPLE * rms)
+        } else {
+            next.robust_scale
+        };
+        pose = Some(ForearmPose {
+            rms,
+            robust_scale,
+            ..next
+        });
     }
     pose.ok_or(EstimateError::ForearmPhaseTooShort)
 }
@@ -157,17 +169,20 @@ fn solve_forearm_pose<I: Iterator<Item = FitPoint>>(
     // θ = (E0x, E0z, l2, compliance, slide, offset x, offset z).
     let mut normal = SMatrix::<f64, 7, 7>::zeros();
     let mut rhs = SVector::<f64, 7>::zeros();
+    let (mut weighted_square, mut weight_sum) = (0.0, 0.0);
     for p in points {
-        let weight = previous.map_or(1.0, |pose| {
-            let scale = ROBUST_SCALE.max(NOISE_MULTIPLE * pose.rms);
+        let (weight, distance) = previous.map_or((1.0, 0.0), |pose| {
             let wrist = p.at(pose.correction);
             let elbow = Point::new(
                 wrist.x + pose.forearm_length * p.forearm.x,
                 wrist.z + pose.forearm_length * p.forearm.z,
             );
-            let u = elbow.distance(pose.elbow) / scale;
-            1.0 / (1.0 + u * u)
+            let distance = elbow.distance(pose.elbow);
+            let u = distance / pose.robust_scale;
+            (1.0 / (1.0 + u * u), distance)
         });
+        weighted_square += weight * distance * distance;
+        weight_sum += weight;
         let s = if p.slipped { 1.0 } else { 0.0 };
         let x_row = [-1.0, 0.0, p.forearm.x, p.force.x, s * p.forearm.x, -s, 0.0];
         let z_row = [0.0, -1.0, p.forearm.z, p.force.z, s * p.forearm.z, 0.0, -s];
@@ -208,6 +223,11 @@ fn solve_forearm_pose<I: Iterator<Item = FitPoint>>(
             offset: Point::new(theta[5], theta[6]),
         },
         rms: 0.0,
+        robust_scale: if weight_sum > 0.0 {
+            ROBUST_SCALE.max(NOISE_MULTIPLE * libm::sqrt(weighted_square / weight_sum))
+        } else {
+            ROBUST_SCALE
+        },
     })
 }
 

@@ -19,7 +19,8 @@
 //! Each intersection is a candidate circle (centre, radius = mean distance to
 //! its samples). Candidates vote into a 1-D radius accumulator with the
 //! paper's 1 mm cells up to [`MAX_RADIUS`]; the winner is the cell with the
-//! most votes in a ±[`PEAK_HALF_WIDTH`]-cell window (coarse). The fine stage
+//! most votes in a window of 2 × [`PEAK_HALF_WIDTH`] + 1 cells, the coarse
+//! radius its vote centroid. The fine stage
 //! averages the candidates within ±[`FINE_WINDOW`] of the winning radius,
 //! then once more within ±[`FINE_WINDOW`] of that average; the centre is the
 //! average centre of the same candidates.
@@ -201,17 +202,13 @@ where
             *slot = slot.saturating_add(1);
         }
     }
-    // Sliding-window peak: votes in cells peak ± PEAK_HALF_WIDTH.
+    // Sliding-window peak: votes in cells start..start + window; the coarse
+    // radius is the centroid of the winning window.
     let window = 2 * PEAK_HALF_WIDTH + 1;
-    let (peak, best) = accumulator
+    let (best_start, best) = accumulator
         .windows(window)
         .enumerate()
-        .map(|(start, cells)| {
-            (
-                start + PEAK_HALF_WIDTH,
-                cells.iter().map(|&c| u32::from(c)).sum::<u32>(),
-            )
-        })
+        .map(|(start, cells)| (start, cells.iter().map(|&c| u32::from(c)).sum::<u32>()))
         .fold((0usize, 0u32), |best, current| {
             if current.1 > best.1 {
                 current
@@ -222,7 +219,14 @@ where
     if best == 0 {
         return Err(CircleFitError::Degenerate);
     }
-    let coarse = peak as f64 * CELL;
+    let moment: u32 = accumulator
+        .iter()
+        .skip(best_start)
+        .take(window)
+        .zip(0u32..)
+        .map(|(&c, offset)| offset * u32::from(c))
+        .sum();
+    let coarse = (best_start as f64 + f64::from(moment) / f64::from(best)) * CELL;
     let first =
         window_mean(candidates.clone(), coarse, FINE_WINDOW).ok_or(CircleFitError::Degenerate)?;
     let fine =

@@ -18,7 +18,7 @@ mod hough;
 mod phase;
 
 pub use circle::{fit_circle_kasa, fit_circle_taubin, Circle, CircleFitError};
-pub use geometric::fit_circle_geometric;
+pub use geometric::{fit_circle_geometric, GeometricFit};
 pub use grasp::{
     detect_compliance, detect_slip, fit_forearm_pose, FitPoint, ForearmPose, FreeCorrections,
     GraspCorrection,
@@ -164,6 +164,30 @@ impl PointModel {
             .iter()
             .enumerate()
             .map(move |(offset, sample)| self.fit_point(first + offset, sample))
+    }
+
+    /// Corrected point of path sample `index`, if there is one.
+    pub fn point_at(&self, path: &[PathSample], index: usize) -> Option<Point> {
+        path.get(index)
+            .map(|sample| self.fit_point(index, sample).at(self.correction))
+    }
+
+    /// Robust circle through the corrected points of `path[range]`: the
+    /// bounded Hough transform (chords) as a start that outliers and
+    /// corrupted stretches cannot pull, refined by the robust geometric fit.
+    ///
+    /// # Errors
+    /// Either fit failed.
+    pub fn robust_circle(
+        &self,
+        path: &[PathSample],
+        range: Range<usize>,
+    ) -> Result<GeometricFit, CircleFitError> {
+        let first = range.start;
+        let start = hough_circle_chords(range.len(), |offset| {
+            self.point_at(path, first.checked_add(offset)?)
+        })?;
+        fit_circle_geometric(self.points(path, range), start)
     }
 
     /// Corrected points of `path[range]`.
@@ -323,8 +347,10 @@ fn fit_robust(path: &[PathSample]) -> Result<(Phases, PhaseFits), EstimateError>
         radius: pose.forearm_length,
     };
     let elbow_path = grasp.along_forearm(forearm.radius);
-    let upper_arm = robust_circle(elbow_path.points(path, phases.upper_arm.clone()))
-        .map_err(EstimateError::UpperArmFit)?;
+    let upper_arm = elbow_path
+        .robust_circle(path, phases.upper_arm.clone())
+        .map_err(EstimateError::UpperArmFit)?
+        .circle;
     Ok((
         phases,
         PhaseFits {
@@ -333,9 +359,4 @@ fn fit_robust(path: &[PathSample]) -> Result<(Phases, PhaseFits), EstimateError>
             elbow_path,
         },
     ))
-}
-
-/// Taubin start, robust geometric refinement.
-fn robust_circle<I: Iterator<Item = Point> + Clone>(points: I) -> Result<Circle, CircleFitError> {
-    fit_circle_geometric(points.clone(), fit_circle_taubin(points)?)
 }

@@ -5,19 +5,20 @@
 //! exceeds [`LIFT_PSI`]. While the elbow rests on the table the grasp point
 //! stays on a circle about it; phase 1 ends where the grasp point leaves
 //! that circle. The circle is not known in advance, so the split is found by
-//! a fixed number of rounds ([`ROUNDS`]): fit (Taubin) a circle to the
+//! a fixed number of rounds ([`ROUNDS`]): fit a robust circle to the
 //! current phase-1 samples (initially lift-off up to psi = [`INITIAL_PSI`]),
-//! scan forward for the first run of [`DEPARTURE_RUN`] samples whose radial
-//! residual exceeds [`DEPARTURE_TOLERANCE`], and end phase 1 just after the
+//! scan forward for the first sample whose radial residual exceeds
+//! [`DEPARTURE_TOLERANCE`] with at least [`DEPARTURE_PERCENT`] % of the
+//! [`DEPARTURE_WINDOW`] samples from it doing so too (a lasting departure,
+//! not an outlier or a short corrupted stretch), and end phase 1 just after the
 //! last sample before that run whose residual was within
 //! [`SETTLED_TOLERANCE`] (both tolerances grow to [`NOISE_MULTIPLE`] × and
-//! 1 × the fit's RMS residual on noisier data). Phase 2 (the upper arm turning about the shoulder)
+//! 1 × the fit's robust RMS residual on noisier data). Phase 2 (the upper arm turning about the shoulder)
 //! is every sample from there to the end of the path.
 //!
-//! Work: [`ROUNDS`] × (one fit, two passes, and one scan) over the path,
-//! O(n); memory O(1).
+//! Work: [`ROUNDS`] × (one robust fit and one scan that evaluates each
+//! residual twice) over the path, O(n); memory O(1).
 
-use super::circle::fit_circle_taubin;
 use super::{EstimateError, PointModel, MIN_PHASE_SAMPLES};
 use crate::path::PathSample;
 use core::ops::Range;
@@ -32,9 +33,13 @@ pub const INITIAL_PSI: f64 = 0.5;
 /// Radial residual that counts as having left the phase-1 circle [m]:
 /// 10 × the position noise of `plant.md`.
 pub const DEPARTURE_TOLERANCE: f64 = 1.0e-3;
-/// Consecutive samples beyond [`DEPARTURE_TOLERANCE`] that confirm the
-/// departure (0.1 s at 100 Hz): single outliers do not end phase 1.
-pub const DEPARTURE_RUN: usize = 10;
+/// Look-ahead window that confirms a departure [samples] (0.5 s at
+/// 100 Hz): the departure must persist, so outliers and a short corrupted
+/// stretch do not end phase 1.
+pub const DEPARTURE_WINDOW: usize = 50;
+/// Share of the look-ahead window that must be beyond
+/// [`DEPARTURE_TOLERANCE`] [%].
+pub const DEPARTURE_PERCENT: usize = 90;
 /// Residual of the last phase-1 sample before the departure [m]: 3σ of the
 /// position noise.
 pub const SETTLED_TOLERANCE: f64 = 0.3e-3;
@@ -94,28 +99,40 @@ pub fn detect_phases_from(
         if end.saturating_sub(lift) < MIN_PHASE_SAMPLES {
             return Err(EstimateError::ForearmPhaseTooShort);
         }
-        let circle =
-            fit_circle_taubin(grasp.points(path, lift..end)).map_err(EstimateError::ForearmFit)?;
-        let noise = circle.rms_residual(grasp.points(path, lift..end));
-        let departure_tolerance = DEPARTURE_TOLERANCE.max(NOISE_MULTIPLE * noise);
-        let settled_tolerance = SETTLED_TOLERANCE.max(noise);
-        let mut run = 0;
+        let fit = grasp
+            .robust_circle(path, lift..end)
+            .map_err(EstimateError::ForearmFit)?;
+        let departure_tolerance = DEPARTURE_TOLERANCE.max(NOISE_MULTIPLE * fit.noise);
+        let settled_tolerance = SETTLED_TOLERANCE.max(fit.noise);
+        let residual = |index: usize| {
+            grasp.point_at(path, index).map_or(0.0, |point| {
+                libm::fabs(point.distance(fit.circle.centre) - fit.circle.radius)
+            })
+        };
+        let departed = |index: usize| residual(index) > departure_tolerance;
+        // Samples beyond tolerance in the look-ahead window [index, index + W).
+        let mut ahead = (lift..path.len().min(lift + DEPARTURE_WINDOW))
+            .filter(|&i| departed(i))
+            .count();
         let mut settled = lift;
         let mut departure = None;
-        for (index, point) in grasp.points(path, lift..path.len()).enumerate() {
-            let residual = libm::fabs(point.distance(circle.centre) - circle.radius);
-            if residual > departure_tolerance {
-                run += 1;
-                if run == DEPARTURE_RUN {
-                    departure = Some(settled);
-                    break;
-                }
-            } else {
-                run = 0;
-                if residual <= settled_tolerance {
-                    settled = lift + index + 1;
-                }
+        for index in lift..path.len() {
+            let width = DEPARTURE_WINDOW.min(path.len() - index);
+            let value = residual(index);
+            if value > departure_tolerance
+                && width >= MIN_PHASE_SAMPLES
+                && ahead * 100 >= width * DEPARTURE_PERCENT
+            {
+                departure = Some(settled);
+                break;
             }
+            if value <= settled_tolerance {
+                settled = index + 1;
+            }
+            ahead -= usize::from(departed(index));
+            ahead += usize::from(
+                index + DEPARTURE_WINDOW < path.len() && departed(index + DEPARTURE_WINDOW),
+            );
         }
         end = departure.ok_or(EstimateError::UpperArmPhaseTooShort)?;
     }
