@@ -12,6 +12,7 @@
 mod logs;
 
 use limb_kernel::estimation::{estimate_arm, Method};
+use limb_kernel::validate::{validate, Rejection, ValidationLimits};
 
 const METHODS: [(Method, &str); 3] = [
     (Method::Hough, "hough"),
@@ -38,6 +39,44 @@ fn row(name: &str, log: &logs::Log, l1: f64, l2: f64) {
         });
     }
     println!("| {name} | {} |", cells.join(" | "));
+}
+
+/// What `Auto` saw on a log and what the default validator says.
+fn evidence_row(name: &str, log: &logs::Log) {
+    match estimate_arm(&log.path, Method::Auto) {
+        Ok(e) => {
+            let v = e.evidence;
+            let start = log.path.first().map(|s| s.pose.point()).unwrap_or_default();
+            let verdict = match validate(&e, start, &ValidationLimits::default()) {
+                Ok(_) => "accepted".to_string(),
+                Err(rejection) => format!("{rejection:?}"),
+            };
+            // The start-pose mismatch: the only check left failing when every
+            // other limit is wide open and the mismatch tolerance is zero.
+            let open = ValidationLimits {
+                min_arc: 0.0,
+                max_residual: f64::MAX,
+                max_method_disagreement: f64::MAX,
+                max_geometry_mismatch: 0.0,
+                ..ValidationLimits::default()
+            };
+            let mismatch = match validate(&e, start, &open) {
+                Err(Rejection::GeometryInconsistent(m)) => format!("{:.2}", m * 1e3),
+                other => format!("{other:?}"),
+            };
+            println!(
+                "| {name} | {:.2} / {:.2} | {:.3} / {:.3} | {:.3} | {mismatch} | {} / {} | {verdict} |",
+                v.forearm_arc,
+                v.upper_arm_arc,
+                v.forearm_residual * 1e3,
+                v.upper_arm_residual * 1e3,
+                v.method_disagreement.map_or(f64::NAN, |d| d * 1e3),
+                v.forearm_samples,
+                v.upper_arm_samples,
+            );
+        }
+        Err(error) => println!("| {name} | {error:?} | | | | |"),
+    }
 }
 
 fn main() {
@@ -77,5 +116,17 @@ fn main() {
             l1,
             l2,
         );
+    }
+    println!(
+        "\n`Auto` evidence and the default validator:\n\n| log | arcs [rad] phase 1 / 2 | RMS residual [mm] 1 / 2 | Hough disagreement [mm] | start-pose mismatch [mm] | samples 1 / 2 | validator |\n|---|---|---|---|---|---|---|"
+    );
+    for case in 1..=6 {
+        let name = format!("noisy/case{case}");
+        evidence_row(&name, &logs::read(&format!("{name}.csv")));
+    }
+    for entry in labels.split("\n {").skip(1) {
+        let start = entry.find("\"file\": \"").expect("file") + 9;
+        let file = entry[start..].split('"').next().expect("name");
+        evidence_row(file, &logs::read(&format!("effects/{file}")));
     }
 }
