@@ -2,7 +2,7 @@
 
 use limb_kernel::estimation::{
     estimate_arm, fit_circle_geometric, fit_circle_kasa, fit_circle_taubin, hough_circle_chords,
-    hough_circle_normals, ArmEstimate, Circle, FitEvidence, Method,
+    hough_circle_normals, ArmEstimate, Circle, FitEvidence, GraspCorrection, Method, PointModel,
 };
 use limb_kernel::geometry::{Point, Pose, Wrench};
 use limb_kernel::path::PathSample;
@@ -51,6 +51,25 @@ proptest! {
                             ("hough normals", normals), ("hough chords", chords)] {
             prop_assert!(close(fit, centre, radius, EXACT), "{name}: {fit:?}");
         }
+    }
+
+    /// The fast corrected point equals the fit point under the corrections.
+    #[test]
+    fn point_model_paths_agree(
+        x in -1.0f64..1.0, z in -1.0f64..1.0, psi in -3.2f64..3.2, fx in -50.0f64..50.0,
+        fz in -50.0f64..50.0, along in prop_oneof![Just(0.0), 0.0f64..0.5], compliance in 0.0f64..0.01,
+        slide in -0.02f64..0.02, ox in -0.02f64..0.02, oz in -0.02f64..0.02,
+        index in 0usize..10, slip_index in 0usize..10,
+    ) {
+        let model = PointModel {
+            forearm_length: along,
+            correction: GraspCorrection { compliance, slide, offset: Point::new(ox, oz) },
+            slip_index,
+        };
+        let sample = PathSample { time: 0.0, pose: Pose::new(x, z, psi), wrench: Wrench::new(fx, fz, 0.0) };
+        let fast = model.point(index, &sample);
+        let full = model.fit_point(index, &sample).at(model.correction);
+        prop_assert!(fast.distance(full) < 1e-12, "{fast:?} {full:?}");
     }
 
     /// The fits are total: any points give a circle with a finite positive

@@ -166,10 +166,33 @@ impl PointModel {
             .map(move |(offset, sample)| self.fit_point(first + offset, sample))
     }
 
+    /// Corrected point of path sample `index`: the same as
+    /// `fit_point(index, sample).at(correction)`, without the trigonometry
+    /// when the point lies at the grasp (no step along the forearm).
+    pub fn point(&self, index: usize, sample: &PathSample) -> Point {
+        let c = self.correction;
+        let slipped = index >= self.slip_index;
+        let (along, offset) = if slipped {
+            (self.forearm_length + c.slide, c.offset)
+        } else {
+            (self.forearm_length, Point::default())
+        };
+        let wrist = Point::new(
+            sample.pose.x + c.compliance * sample.wrench.fx - offset.x,
+            sample.pose.z + c.compliance * sample.wrench.fz - offset.z,
+        );
+        if along == 0.0 {
+            return wrist;
+        }
+        Point::new(
+            wrist.x + along * libm::cos(sample.pose.psi),
+            wrist.z - along * libm::sin(sample.pose.psi),
+        )
+    }
+
     /// Corrected point of path sample `index`, if there is one.
     pub fn point_at(&self, path: &[PathSample], index: usize) -> Option<Point> {
-        path.get(index)
-            .map(|sample| self.fit_point(index, sample).at(self.correction))
+        path.get(index).map(|sample| self.point(index, sample))
     }
 
     /// Robust circle through the corrected points of `path[range]`: the
@@ -190,14 +213,19 @@ impl PointModel {
         fit_circle_geometric(self.points(path, range), start)
     }
 
-    /// Corrected points of `path[range]`.
+    /// Corrected points of `path[range]` (empty where the range is out of
+    /// bounds).
     pub fn points<'a>(
         &'a self,
         path: &'a [PathSample],
         range: Range<usize>,
     ) -> impl Iterator<Item = Point> + Clone + 'a {
-        self.fit_points(path, range)
-            .map(move |p| p.at(self.correction))
+        let first = range.start;
+        path.get(range)
+            .unwrap_or(&[])
+            .iter()
+            .enumerate()
+            .map(move |(offset, sample)| self.point(first + offset, sample))
     }
 }
 
