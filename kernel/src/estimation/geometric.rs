@@ -72,7 +72,9 @@ where
         let (mut weighted_square, mut weight_sum) = (0.0, 0.0);
         for p in points.clone() {
             let (dx, dz) = (p.x - theta[0], p.z - theta[1]);
-            let distance = libm::hypot(dx, dz);
+            // sqrt, not hypot: coordinates are metres, far from overflow, and
+            // libm::hypot costs as much as the rest of the iteration.
+            let distance = libm::sqrt(dx * dx + dz * dz);
             if distance <= 0.0 {
                 continue;
             }

@@ -8,8 +8,18 @@
 //! pose and l2 (eq. 19-21), and a circle fitted to the phase-2 elbow path
 //! gives the upper-arm length l1 and the shoulder (eq. 28).
 //!
+//! Phases are found from the data (`phase.rs`); [`Method::Ls`] is the paper's
+//! Kåsa fit, [`Method::Hough`] the bounded Hough transform (`hough.rs`),
+//! [`Method::Auto`] the robust forearm-pose model with grasp compliance and
+//! slip corrections (`grasp.rs`) and a robust geometric fit (`geometric.rs`),
+//! checked against Hough. Details, accuracy and timing tables:
+//! `kernel/src/estimation/README.md`.
+//!
+//! # Bounds
 //! Work and memory are bounded: the path holds at most
-//! [`crate::path::PATH_CAPACITY`] samples and every loop is over it.
+//! [`crate::path::PATH_CAPACITY`] samples, every loop is over it or over a
+//! constant, and no fit copies it (points are streamed from the path); the
+//! largest stack object is the 1 002-byte Hough accumulator.
 
 mod circle;
 mod geometric;
@@ -310,7 +320,7 @@ fn fit_ls(
     })
 }
 
-/// The bounded Hough transform on both phases (see [`hough`]).
+/// The bounded Hough transform on both phases (see `hough.rs`).
 fn fit_hough(
     path: &[PathSample],
     phases: &Phases,
@@ -343,7 +353,7 @@ fn fit_hough(
 }
 
 /// The grasp model of a log: compliance and slip detected from the data
-/// (see [`grasp`]), and the phases under that model.
+/// (see `grasp.rs`), and the phases under that model.
 fn grasp_model(path: &[PathSample]) -> Result<(Phases, PointModel), EstimateError> {
     let mut model = PointModel::GRASP;
     let mut phases = detect_phases(path, &model)?;
@@ -360,7 +370,7 @@ fn grasp_model(path: &[PathSample]) -> Result<(Phases, PointModel), EstimateErro
 
 /// The project's best fit: phase 1 by the robust forearm-pose model (grasp
 /// points, psi and wrench, with compliance and slip corrected, see
-/// [`grasp`]), phase 2 by a Taubin start and a robust geometric refinement
+/// `grasp.rs`), phase 2 by a Taubin start and a robust geometric refinement
 /// on the corrected elbow path.
 fn fit_robust(path: &[PathSample]) -> Result<(Phases, PhaseFits), EstimateError> {
     let (phases, grasp) = grasp_model(path)?;
