@@ -94,27 +94,13 @@ fn main() {
         );
     }
     println!("\nLabelled effect logs (errors in mm):\n\n| log | {header} |\n|---|---|---|---|");
-    let labels =
-        std::fs::read_to_string(format!("{}/effects/labels.json", logs::DATA)).expect("labels");
-    for entry in labels.split("\n {").skip(1) {
-        let field = |key: &str| {
-            let start = entry.find(&format!("\"{key}\":")).expect("key") + key.len() + 3;
-            entry[start..]
-                .split([',', '\n'])
-                .next()
-                .expect("value")
-                .trim()
-                .trim_matches('"')
-                .to_string()
-        };
-        let case: usize = field("case").parse().expect("case");
-        let (l1, l2) = logs::case_lengths(case);
-        let file = field("file");
+    let effects = logs::labelled_effects();
+    for e in &effects {
         row(
-            &field("effect"),
-            &logs::read(&format!("effects/{file}")),
-            l1,
-            l2,
+            &e.effect,
+            &logs::read(&format!("effects/{}", e.file)),
+            e.l1,
+            e.l2,
         );
     }
     println!(
@@ -124,9 +110,7 @@ fn main() {
         let name = format!("noisy/case{case}");
         evidence_row(&name, &logs::read(&format!("{name}.csv")));
     }
-    for entry in labels.split("\n {").skip(1) {
-        let start = entry.find("\"file\": \"").expect("file") + 9;
-        let file = entry[start..].split('"').next().expect("name");
-        evidence_row(file, &logs::read(&format!("effects/{file}")));
+    for e in &effects {
+        evidence_row(&e.file, &logs::read(&format!("effects/{}", e.file)));
     }
 }

@@ -94,3 +94,46 @@ fn outliers_and_a_corrupted_stretch_move_auto_by_less_than_three_mm() {
         assert!(moved < 3e-3, "{name}: moved {moved} m: {e:?}");
     }
 }
+
+/// Errors (|Δl1|, |Δl2|, shoulder distance) [m] of `method` on a log.
+fn errors(log: &logs::Log, l1: f64, l2: f64, method: Method) -> [f64; 3] {
+    let e = estimate_arm(&log.path, method).expect("estimate");
+    let shoulder = log.shoulder.expect("truth column");
+    [
+        (e.upper_arm_length - l1).abs(),
+        (e.forearm_length - l2).abs(),
+        e.shoulder.distance(shoulder),
+    ]
+}
+
+/// On every labelled effect log `Auto` is never worse than the paper's
+/// Kåsa fit by more than 1 mm (l1, l2, shoulder), and for grasp compliance
+/// and grasp slip it is within 1.5 mm of the truth where Kåsa is centimetres
+/// off.
+#[test]
+fn auto_is_never_worse_than_kasa_and_corrects_compliance_and_slip() {
+    for labelled in logs::labelled_effects() {
+        let log = logs::read(&format!("effects/{}", labelled.file));
+        let auto = errors(&log, labelled.l1, labelled.l2, Method::Auto);
+        let kasa = errors(&log, labelled.l1, labelled.l2, Method::Ls);
+        for (a, k) in auto.iter().zip(&kasa) {
+            assert!(
+                a - k <= 1e-3,
+                "{}: auto {auto:?} kasa {kasa:?}",
+                labelled.effect
+            );
+        }
+        if ["grasp_compliance", "grasp_slip"].contains(&labelled.effect.as_str()) {
+            assert!(
+                auto.iter().all(|&a| a <= 1.5e-3),
+                "{}: {auto:?}",
+                labelled.effect
+            );
+            assert!(
+                kasa.iter().any(|&k| k >= 1e-2),
+                "{}: {kasa:?}",
+                labelled.effect
+            );
+        }
+    }
+}

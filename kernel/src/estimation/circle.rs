@@ -65,6 +65,8 @@ impl Circle {
 pub enum CircleFitError {
     /// Fewer than three points.
     TooFewPoints,
+    /// More points than a bounded fit accepts ([`crate::path::PATH_CAPACITY`]).
+    TooManyPoints,
     /// The points are collinear or coincident: no unique circle.
     Degenerate,
     /// The result was not finite.

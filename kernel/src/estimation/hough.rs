@@ -27,12 +27,14 @@
 //!
 //! # Bounds (fixed at compile time)
 //! For a phase of n ≤ [`crate::path::PATH_CAPACITY`] samples:
-//! * votes: V ≤ n/2 (normals) or ≤ n/3 (chords), at most 2 048;
+//! * votes: V ≤ n/2 (normals) or ≤ n/3 (chords), at most [`MAX_VOTES`]
+//!   = 2 048 (checked at compile time to fit the u16 cells);
 //! * work: 3 passes over the votes (vote, coarse-to-fine twice), each vote
 //!   ≈ 40 flops and one `sqrt`; plus one scan of the accumulator with a
 //!   sliding window (2 × [`BINS`] additions): ≤ 3 × 2 048 × 40 + 1 002 ≈
 //!   2.5 × 10⁵ flops in the worst case;
-//! * memory: the accumulator, [`BINS`] × 2 bytes = 1 002 bytes of stack, and
+//! * memory: the accumulator, [`ACCUMULATOR_BYTES`] = [`BINS`] × 2 = 1 002
+//!   bytes of stack, and
 //!   O(1) besides; no copy of the path.
 //!
 //! # Resolution
@@ -43,6 +45,7 @@
 
 use super::circle::{Circle, CircleFitError};
 use crate::geometry::Point;
+use crate::path::PATH_CAPACITY;
 
 /// Largest radius voted for [m]: the paper's ρ = 500 mm (eq. 17).
 pub const MAX_RADIUS: f64 = 0.5;
@@ -54,6 +57,13 @@ pub const BINS: usize = 501;
 pub const PEAK_HALF_WIDTH: usize = 2;
 /// Half-width of the fine averaging window about the peak radius [m].
 pub const FINE_WINDOW: f64 = 2.0e-3;
+/// Most votes one transform casts: n/2 for normals, n ≤
+/// [`PATH_CAPACITY`]; chords cast at most n/3.
+pub const MAX_VOTES: usize = PATH_CAPACITY / 2;
+// Every accumulator cell is a u16: it cannot overflow.
+const _: () = assert!(MAX_VOTES <= u16::MAX as usize);
+/// Accumulator size [bytes].
+pub const ACCUMULATOR_BYTES: usize = BINS * core::mem::size_of::<u16>();
 /// Smallest sine of the angle between two centre lines that still votes:
 /// nearly parallel lines meet far away and carry no information (3°).
 const MIN_LINE_SINE: f64 = 0.05;
@@ -98,13 +108,13 @@ struct Candidate {
     radius: f64,
 }
 
-/// Circle through samples that each carry their normal (phase 1): the
-/// sample at `point(i)` with forearm elevation psi has its centre on the ray
-/// along (cos psi, −sin psi) (eq. 18 in frame S). `sample(i)` gives point
-/// and psi of the i-th of `count` samples.
+/// Circle through samples that each carry their normal (phase 1):
+/// `sample(i)` gives the point p and forearm elevation psi of the i-th of
+/// `count` samples, and the centre lies on the line through p along
+/// (cos psi, −sin psi) (eq. 18 in frame S).
 ///
 /// # Errors
-/// Fewer than three samples, no peak (no two usable normals), non-finite
+/// Fewer than three or more than [`PATH_CAPACITY`] samples, no peak (no two usable normals), non-finite
 /// result.
 pub fn hough_circle_normals<F>(count: usize, sample: F) -> Result<Circle, CircleFitError>
 where
@@ -112,6 +122,9 @@ where
 {
     if count < 3 {
         return Err(CircleFitError::TooFewPoints);
+    }
+    if count > PATH_CAPACITY {
+        return Err(CircleFitError::TooManyPoints);
     }
     let half = count / 2;
     let line = |i: usize| {
@@ -140,13 +153,16 @@ where
 /// points given by `point(i)`.
 ///
 /// # Errors
-/// Fewer than three points, no peak, non-finite result.
+/// Fewer than three or more than [`PATH_CAPACITY`] points, no peak, non-finite result.
 pub fn hough_circle_chords<F>(count: usize, point: F) -> Result<Circle, CircleFitError>
 where
     F: Fn(usize) -> Option<Point>,
 {
     if count < 3 {
         return Err(CircleFitError::TooFewPoints);
+    }
+    if count > PATH_CAPACITY {
+        return Err(CircleFitError::TooManyPoints);
     }
     let third = count / 3;
     let point = &point;
@@ -199,7 +215,7 @@ where
     let mut accumulator = [0u16; BINS];
     for index in candidates.clone().flatten().filter_map(|c| cell(c.radius)) {
         if let Some(slot) = accumulator.get_mut(index) {
-            *slot = slot.saturating_add(1);
+            *slot = slot.checked_add(1).ok_or(CircleFitError::TooManyPoints)?;
         }
     }
     // Sliding-window peak: votes in cells start..start + window; the coarse

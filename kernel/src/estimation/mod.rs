@@ -33,7 +33,10 @@ pub use grasp::{
     detect_compliance, detect_slip, fit_forearm_pose, FitPoint, ForearmPose, FreeCorrections,
     GraspCorrection,
 };
-pub use hough::{hough_circle_chords, hough_circle_normals};
+pub use hough::{
+    hough_circle_chords, hough_circle_normals, ACCUMULATOR_BYTES as HOUGH_ACCUMULATOR_BYTES,
+    MAX_VOTES as HOUGH_MAX_VOTES,
+};
 pub use phase::{detect_phases, detect_phases_from, Phases};
 
 use crate::geometry::Point;

@@ -51,3 +51,38 @@ pub fn case_lengths(case: usize) -> (f64, f64) {
     let l2 = [0.20, 0.18, 0.20, 0.18, 0.20, 0.18][case - 1];
     (l1, l2)
 }
+
+/// One labelled effect log of `effects/labels.json`.
+pub struct Labelled {
+    pub file: String,
+    pub effect: String,
+    pub l1: f64,
+    pub l2: f64,
+}
+
+/// The labelled effect logs (a minimal reader of the flat labels file).
+pub fn labelled_effects() -> Vec<Labelled> {
+    let labels = std::fs::read_to_string(format!("{DATA}/effects/labels.json")).expect("labels");
+    labels
+        .split("\n {")
+        .skip(1)
+        .map(|entry| {
+            let field = |key: &str| {
+                let start = entry.find(&format!("\"{key}\":")).expect("key") + key.len() + 3;
+                entry[start..]
+                    .split([',', '\n'])
+                    .next()
+                    .expect("value")
+                    .trim()
+                    .trim_matches('"')
+                    .to_string()
+            };
+            Labelled {
+                file: field("file"),
+                effect: field("effect"),
+                l1: field("l1").parse().expect("l1"),
+                l2: field("l2").parse().expect("l2"),
+            }
+        })
+        .collect()
+}
