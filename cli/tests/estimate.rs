@@ -69,3 +69,25 @@ fn missing_file_exits_2() {
         Some(2)
     );
 }
+
+#[test]
+fn ground_truth_columns_are_ignored() {
+    let text = std::fs::read_to_string(CASE3).unwrap();
+    // Keep t..ty (the columns a real robot gives), drop the ground truth.
+    let robot_only: String = text
+        .lines()
+        .map(|line| line.split(',').take(11).collect::<Vec<_>>().join(",") + "\n")
+        .collect();
+    let dir = std::env::temp_dir().join(format!("limb-estimate-truth-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("robot_only.csv");
+    std::fs::write(&file, robot_only).unwrap();
+    let json = |path: &str| -> serde_json::Value {
+        serde_json::from_slice(&limb(&["estimate", path, "--json"]).stdout).expect("JSON")
+    };
+    let (full, robot) = (json(CASE3), json(file.to_str().unwrap()));
+    for key in ["l1", "l2", "elbow", "shoulder", "samples"] {
+        assert_eq!(full[key], robot[key], "{key}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
