@@ -4,10 +4,13 @@
 
 mod config;
 mod error;
+mod estimate;
+mod robot_log;
 mod run;
 
 use clap::{Parser, Subcommand};
 use error::CliError;
+use std::path::PathBuf;
 
 #[derive(Parser)]
 #[command(
@@ -26,6 +29,17 @@ enum Command {
     Run(run::RunArgs),
     /// Print the embedded default kernel configuration as JSON.
     Config,
+    /// Fit the arm (l1, l2, elbow, shoulder) from an estimation-motion log.
+    Estimate {
+        /// Log in the CSV format of plant.md.
+        log: PathBuf,
+        /// Estimator.
+        #[arg(long, value_enum, default_value = "auto")]
+        method: estimate::MethodArg,
+        /// Print one JSON object on stdout.
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 fn main() {
@@ -33,6 +47,7 @@ fn main() {
     let result: Result<(), CliError> = match cli.command {
         Command::Run(args) => run::run(&args),
         Command::Config => config::run(),
+        Command::Estimate { log, method, json } => estimate::run(&log, method, json),
     };
     if let Err(error) = result {
         eprintln!("limb: {error}");

@@ -1,4 +1,9 @@
-//! Circle fits to planar points (frame S).
+//! Algebraic circle fits to planar points (frame S): Kåsa (paper eq. 22-27)
+//! and Taubin.
+//!
+//! Both fits are closed-form over the mean-centred moments of the points, so
+//! they read the points twice (mean, then moments) and hold no buffer: the
+//! points come from any cloneable iterator. Work is O(n), memory O(1).
 
 use crate::geometry::Point;
 use nalgebra::{Matrix3, Vector3};
@@ -14,19 +19,43 @@ pub struct Circle {
 }
 
 impl Circle {
-    /// RMS of the geometric residuals |p − c| − r over `points` [m].
-    pub fn rms_residual(&self, points: &[Point]) -> f64 {
-        if points.is_empty() {
-            return 0.0;
+    /// RMS of the geometric residuals |p − c| − r over `points` [m]; 0 for
+    /// no points.
+    pub fn rms_residual<I: Iterator<Item = Point>>(&self, points: I) -> f64 {
+        let (count, sum) = points.fold((0usize, 0.0), |(count, sum), p| {
+            let e = p.distance(self.centre) - self.radius;
+            (count + 1, sum + e * e)
+        });
+        if count == 0 {
+            0.0
+        } else {
+            libm::sqrt(sum / count as f64)
         }
-        let sum: f64 = points
-            .iter()
-            .map(|p| {
-                let e = p.distance(self.centre) - self.radius;
-                e * e
-            })
-            .sum();
-        libm::sqrt(sum / points.len() as f64)
+    }
+
+    /// Angle between the first and last point seen from the centre
+    /// [rad, 0..π]; 0 for fewer than two points.
+    pub fn arc<I: Iterator<Item = Point>>(&self, points: I) -> f64 {
+        let mut ends: Option<(Point, Point)> = None;
+        for p in points {
+            ends = Some(match ends {
+                None => (p, p),
+                Some((first, _)) => (first, p),
+            });
+        }
+        match ends {
+            Some((a, b)) => {
+                let (ax, az) = (a.x - self.centre.x, a.z - self.centre.z);
+                let (bx, bz) = (b.x - self.centre.x, b.z - self.centre.z);
+                libm::fabs(libm::atan2(ax * bz - az * bx, ax * bx + az * bz))
+            }
+            None => 0.0,
+        }
+    }
+
+    /// True when centre and radius are finite and the radius is > 0.
+    pub fn is_valid(&self) -> bool {
+        self.centre.is_finite() && self.radius.is_finite() && self.radius > 0.0
     }
 }
 
@@ -36,46 +65,165 @@ impl Circle {
 pub enum CircleFitError {
     /// Fewer than three points.
     TooFewPoints,
+    /// More points than a bounded fit accepts ([`crate::path::PATH_CAPACITY`]).
+    TooManyPoints,
     /// The points are collinear or coincident: no unique circle.
     Degenerate,
     /// The result was not finite.
     NonFinite,
 }
 
-/// Algebraic (Kåsa) least-squares fit, paper eq. 22-27: solves
-/// x² + z² = 2a x + 2b z + c in the least-squares sense, on coordinates
-/// centred on the mean for conditioning.
-pub fn fit_circle_kasa(points: &[Point]) -> Result<Circle, CircleFitError> {
-    if points.len() < 3 {
+/// Mean-centred moments of a point set (Chernov's notation, with
+/// w = x² + z² of the centred coordinates) [m^k].
+struct Moments {
+    mean: Point,
+    xx: f64,
+    zz: f64,
+    xz: f64,
+    xw: f64,
+    zw: f64,
+    ww: f64,
+}
+
+/// Smallest spread of the points (trace of their covariance) a fit accepts
+/// [m²]: (1 µm)². Below it the points are coincident.
+const MIN_SPREAD: f64 = 1e-12;
+
+fn moments<I: Iterator<Item = Point> + Clone>(points: I) -> Result<Moments, CircleFitError> {
+    let (count, sx, sz) = points.clone().fold((0usize, 0.0, 0.0), |(n, sx, sz), p| {
+        (n + 1, sx + p.x, sz + p.z)
+    });
+    if count < 3 {
         return Err(CircleFitError::TooFewPoints);
     }
-    let n = points.len() as f64;
-    let (mut mx, mut mz) = (0.0, 0.0);
+    let n = count as f64;
+    let mean = Point::new(sx / n, sz / n);
+    let mut m = Moments {
+        mean,
+        xx: 0.0,
+        zz: 0.0,
+        xz: 0.0,
+        xw: 0.0,
+        zw: 0.0,
+        ww: 0.0,
+    };
     for p in points {
-        mx += p.x;
-        mz += p.z;
+        let (x, z) = (p.x - mean.x, p.z - mean.z);
+        let w = x * x + z * z;
+        m.xx += x * x;
+        m.zz += z * z;
+        m.xz += x * z;
+        m.xw += x * w;
+        m.zw += z * w;
+        m.ww += w * w;
     }
-    mx /= n;
-    mz /= n;
-    let mut normal = Matrix3::<f64>::zeros();
-    let mut rhs = Vector3::<f64>::zeros();
-    for p in points {
-        let (x, z) = (p.x - mx, p.z - mz);
-        let row = Vector3::new(2.0 * x, 2.0 * z, 1.0);
-        normal += row * row.transpose();
-        rhs += row * (x * x + z * z);
+    for value in [
+        &mut m.xx, &mut m.zz, &mut m.xz, &mut m.xw, &mut m.zw, &mut m.ww,
+    ] {
+        *value /= n;
     }
-    let solution = normal.lu().solve(&rhs).ok_or(CircleFitError::Degenerate)?;
-    let (a, b, c) = (solution[0], solution[1], solution[2]);
-    let radius_squared = c + a * a + b * b;
+    if !(m.xx + m.zz + m.ww + m.xw + m.zw).is_finite() || !mean.is_finite() {
+        return Err(CircleFitError::NonFinite);
+    }
+    if m.xx + m.zz < MIN_SPREAD {
+        return Err(CircleFitError::Degenerate);
+    }
+    Ok(m)
+}
+
+/// Largest radius a fit returns [m]: beyond it the points are, for this
+/// application, a straight line (arm segments are < 0.5 m, paper eq. 17).
+const MAX_RADIUS: f64 = 1.0e3;
+
+fn circle_from_centred(
+    m: &Moments,
+    a: f64,
+    b: f64,
+    radius_squared: f64,
+) -> Result<Circle, CircleFitError> {
     if !(radius_squared.is_finite() && a.is_finite() && b.is_finite()) {
         return Err(CircleFitError::NonFinite);
     }
-    if radius_squared <= 0.0 {
+    if radius_squared <= 0.0 || radius_squared > MAX_RADIUS * MAX_RADIUS {
         return Err(CircleFitError::Degenerate);
     }
     Ok(Circle {
-        centre: Point::new(a + mx, b + mz),
+        centre: Point::new(a + m.mean.x, b + m.mean.z),
         radius: libm::sqrt(radius_squared),
     })
+}
+
+/// Algebraic (Kåsa) least-squares fit, paper eq. 22-27: solves
+/// x² + z² = 2a x + 2b z + c in the least-squares sense, on coordinates
+/// centred on the mean for conditioning. Biased toward small radii on short,
+/// noisy arcs; see [`fit_circle_taubin`].
+///
+/// # Errors
+/// Fewer than three points, coincident or collinear points, non-finite data.
+pub fn fit_circle_kasa<I: Iterator<Item = Point> + Clone>(
+    points: I,
+) -> Result<Circle, CircleFitError> {
+    let m = moments(points)?;
+    // Normal equations of rows (2x, 2z, 1) against w; the centred sums of x
+    // and z vanish.
+    let normal = Matrix3::new(
+        4.0 * m.xx,
+        4.0 * m.xz,
+        0.0,
+        4.0 * m.xz,
+        4.0 * m.zz,
+        0.0,
+        0.0,
+        0.0,
+        1.0,
+    );
+    let rhs = Vector3::new(2.0 * m.xw, 2.0 * m.zw, m.xx + m.zz);
+    let solution = normal.lu().solve(&rhs).ok_or(CircleFitError::Degenerate)?;
+    let (a, b, c) = (solution[0], solution[1], solution[2]);
+    circle_from_centred(&m, a, b, c + a * a + b * b)
+}
+
+/// Newton iterations of the Taubin characteristic polynomial. Chernov's
+/// reference implementation allows 99; from the start at 0 the iteration is
+/// monotone and converges in < 10 on any arc, so 20 is ample.
+const TAUBIN_ITERATIONS: usize = 20;
+
+/// Taubin's algebraic fit (Taubin 1991; Chernov's Newton form): the
+/// gradient-weighted algebraic fit, nearly unbiased on short arcs and
+/// invariant to translation and rotation.
+///
+/// # Errors
+/// Fewer than three points, coincident or collinear points, non-finite data.
+pub fn fit_circle_taubin<I: Iterator<Item = Point> + Clone>(
+    points: I,
+) -> Result<Circle, CircleFitError> {
+    let m = moments(points)?;
+    let mz = m.xx + m.zz;
+    let cov = m.xx * m.zz - m.xz * m.xz;
+    let var_w = m.ww - mz * mz;
+    let a3 = 4.0 * mz;
+    let a2 = -3.0 * mz * mz - m.ww;
+    let a1 = var_w * mz + 4.0 * cov * mz - m.xw * m.xw - m.zw * m.zw;
+    let a0 = m.xw * (m.xw * m.zz - m.zw * m.xz) + m.zw * (m.zw * m.xx - m.xw * m.xz) - var_w * cov;
+    let (mut x, mut y) = (0.0f64, a0);
+    for _ in 0..TAUBIN_ITERATIONS {
+        let slope = a1 + x * (2.0 * a2 + 3.0 * a3 * x);
+        let next = x - y / slope;
+        if !next.is_finite() || next == x {
+            break;
+        }
+        let value = a0 + next * (a1 + next * (a2 + next * a3));
+        if libm::fabs(value) >= libm::fabs(y) {
+            break;
+        }
+        x = next;
+        y = value;
+    }
+    let det = x * x - x * mz + cov;
+    if !(det.is_finite() && libm::fabs(det) > 0.0) {
+        return Err(CircleFitError::Degenerate);
+    }
+    let a = (m.xw * (m.zz - x) - m.zw * m.xz) / det / 2.0;
+    let b = (m.zw * (m.xx - x) - m.xw * m.xz) / det / 2.0;
+    circle_from_centred(&m, a, b, a * a + b * b + mz)
 }

@@ -8,15 +8,40 @@
 //! pose and l2 (eq. 19-21), and a circle fitted to the phase-2 elbow path
 //! gives the upper-arm length l1 and the shoulder (eq. 28).
 //!
+//! Phases are found from the data (`phase.rs`); [`Method::Ls`] is the paper's
+//! Kåsa fit, [`Method::Hough`] the bounded Hough transform (`hough.rs`),
+//! [`Method::Auto`] the robust forearm-pose model with grasp compliance and
+//! slip corrections (`grasp.rs`) and a robust geometric fit (`geometric.rs`),
+//! checked against Hough. Details, accuracy and timing tables:
+//! `kernel/src/estimation/README.md`.
+//!
+//! # Bounds
 //! Work and memory are bounded: the path holds at most
-//! [`crate::path::PATH_CAPACITY`] samples and every loop is over it.
+//! [`crate::path::PATH_CAPACITY`] samples, every loop is over it or over a
+//! constant, and no fit copies it (points are streamed from the path); the
+//! largest stack object is the 1 002-byte Hough accumulator.
 
 mod circle;
+mod geometric;
+mod grasp;
+mod hough;
+mod phase;
 
-pub use circle::{fit_circle_kasa, Circle, CircleFitError};
+pub use circle::{fit_circle_kasa, fit_circle_taubin, Circle, CircleFitError};
+pub use geometric::{fit_circle_geometric, GeometricFit};
+pub use grasp::{
+    detect_compliance, detect_slip, fit_forearm_pose, FitPoint, ForearmPose, FreeCorrections,
+    GraspCorrection,
+};
+pub use hough::{
+    hough_circle_chords, hough_circle_normals, ACCUMULATOR_BYTES as HOUGH_ACCUMULATOR_BYTES,
+    MAX_VOTES as HOUGH_MAX_VOTES,
+};
+pub use phase::{detect_phases, detect_phases_from, Phases};
 
 use crate::geometry::Point;
 use crate::path::{PathSample, PATH_CAPACITY};
+use core::ops::Range;
 
 /// Which estimator to use.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -92,12 +117,137 @@ pub enum EstimateError {
 /// Minimum samples a phase needs for a fit.
 pub const MIN_PHASE_SAMPLES: usize = 10;
 
-/// Forearm elevation that ends phase 1 in this first-pass phase split [rad].
-const PHASE_ONE_END_PSI: f64 = 1.2;
-/// Grasp height that starts phase 1 [m]: the forearm has left the table.
-const LIFT_OFF_HEIGHT: f64 = 0.002;
-/// Elbow height that starts phase 2 [m]: the upper arm has left the table.
-const ELBOW_LIFT_OFF_HEIGHT: f64 = 0.005;
+/// How a path sample becomes a point of a fit: the grasp point
+/// (`forearm_length` = 0) or the elbow, eq. 19-21 in frame S:
+/// E = G + l2 (cos psi, −sin psi), with optional grasp corrections.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PointModel {
+    /// Distance from the grasp to the point along the forearm [m].
+    pub forearm_length: f64,
+    /// Grasp corrections applied to every point.
+    pub correction: GraspCorrection,
+    /// Path index from which the grasp has slipped (`usize::MAX`: never).
+    pub slip_index: usize,
+}
+
+impl PointModel {
+    /// The grasp point itself, uncorrected.
+    pub const GRASP: PointModel = PointModel {
+        forearm_length: 0.0,
+        correction: GraspCorrection {
+            compliance: 0.0,
+            slide: 0.0,
+            offset: Point::new(0.0, 0.0),
+        },
+        slip_index: usize::MAX,
+    };
+
+    /// The same corrections, stepping `forearm_length` along the forearm.
+    pub const fn along_forearm(self, forearm_length: f64) -> PointModel {
+        PointModel {
+            forearm_length,
+            ..self
+        }
+    }
+
+    /// The point of path sample `index` with its correction derivatives,
+    /// before the corrections are applied.
+    pub fn fit_point(&self, index: usize, sample: &PathSample) -> FitPoint {
+        let forearm = Point::new(libm::cos(sample.pose.psi), -libm::sin(sample.pose.psi));
+        FitPoint {
+            base: Point::new(
+                sample.pose.x + self.forearm_length * forearm.x,
+                sample.pose.z + self.forearm_length * forearm.z,
+            ),
+            force: Point::new(sample.wrench.fx, sample.wrench.fz),
+            forearm,
+            slipped: index >= self.slip_index,
+        }
+    }
+
+    /// Fit points of `path[range]` (empty where the range is out of bounds).
+    pub fn fit_points<'a>(
+        &'a self,
+        path: &'a [PathSample],
+        range: Range<usize>,
+    ) -> impl Iterator<Item = FitPoint> + Clone + 'a {
+        let first = range.start;
+        path.get(range)
+            .unwrap_or(&[])
+            .iter()
+            .enumerate()
+            .map(move |(offset, sample)| self.fit_point(first + offset, sample))
+    }
+
+    /// Corrected point of path sample `index`: the same as
+    /// `fit_point(index, sample).at(correction)`, without the trigonometry
+    /// when the point lies at the grasp (no step along the forearm).
+    pub fn point(&self, index: usize, sample: &PathSample) -> Point {
+        let c = self.correction;
+        let slipped = index >= self.slip_index;
+        let (along, offset) = if slipped {
+            (self.forearm_length + c.slide, c.offset)
+        } else {
+            (self.forearm_length, Point::default())
+        };
+        let wrist = Point::new(
+            sample.pose.x + c.compliance * sample.wrench.fx - offset.x,
+            sample.pose.z + c.compliance * sample.wrench.fz - offset.z,
+        );
+        if along == 0.0 {
+            return wrist;
+        }
+        Point::new(
+            wrist.x + along * libm::cos(sample.pose.psi),
+            wrist.z - along * libm::sin(sample.pose.psi),
+        )
+    }
+
+    /// Corrected point of path sample `index`, if there is one.
+    pub fn point_at(&self, path: &[PathSample], index: usize) -> Option<Point> {
+        path.get(index).map(|sample| self.point(index, sample))
+    }
+
+    /// Robust circle through the corrected points of `path[range]`: the
+    /// bounded Hough transform (chords) as a start that outliers and
+    /// corrupted stretches cannot pull, refined by the robust geometric fit.
+    ///
+    /// # Errors
+    /// Either fit failed.
+    pub fn robust_circle(
+        &self,
+        path: &[PathSample],
+        range: Range<usize>,
+    ) -> Result<GeometricFit, CircleFitError> {
+        let first = range.start;
+        let start = hough_circle_chords(range.len(), |offset| {
+            self.point_at(path, first.checked_add(offset)?)
+        })?;
+        fit_circle_geometric(self.points(path, range), start)
+    }
+
+    /// Corrected points of `path[range]` (empty where the range is out of
+    /// bounds).
+    pub fn points<'a>(
+        &'a self,
+        path: &'a [PathSample],
+        range: Range<usize>,
+    ) -> impl Iterator<Item = Point> + Clone + 'a {
+        let first = range.start;
+        path.get(range)
+            .unwrap_or(&[])
+            .iter()
+            .enumerate()
+            .map(move |(offset, sample)| self.point(first + offset, sample))
+    }
+}
+
+/// The two circles of an estimate and the model that produced the elbow path.
+struct PhaseFits {
+    forearm: Circle,
+    upper_arm: Circle,
+    elbow_path: PointModel,
+}
 
 /// Estimates the arm from the recorded grasp path with `method`.
 ///
@@ -113,67 +263,141 @@ pub fn estimate_arm(path: &[PathSample], method: Method) -> Result<ArmEstimate, 
     {
         return Err(EstimateError::NonFiniteSample);
     }
-    let mut points = [Point::default(); PATH_CAPACITY];
-    // Phase 1: from lift-off until the forearm is well up.
-    let mut n = 0;
-    for sample in path {
-        if sample.pose.psi >= PHASE_ONE_END_PSI {
-            break;
+    let (phases, fits, method_disagreement) = match method {
+        Method::Ls => {
+            let phases = detect_phases(path, &PointModel::GRASP)?;
+            let fits = fit_ls(path, &phases, PointModel::GRASP)?;
+            (phases, fits, None)
         }
-        if sample.pose.z > LIFT_OFF_HEIGHT {
-            points[n] = sample.pose.point();
-            n += 1;
+        Method::Hough => {
+            let phases = detect_phases(path, &PointModel::GRASP)?;
+            let fits = fit_hough(path, &phases, PointModel::GRASP)?;
+            (phases, fits, None)
         }
-    }
-    if n < MIN_PHASE_SAMPLES {
-        return Err(EstimateError::ForearmPhaseTooShort);
-    }
-    let forearm = fit_circle_kasa(&points[..n]).map_err(EstimateError::ForearmFit)?;
-    let forearm_arc = arc_about(&points[..n], forearm.centre);
-    let (forearm_samples, forearm_residual) = (n, forearm.rms_residual(&points[..n]));
-    // Phase 2: elbow path (eq. 19-21) once the elbow has left the table.
-    let l2 = forearm.radius;
-    n = 0;
-    for sample in path {
-        let elbow = Point::new(
-            sample.pose.x + l2 * libm::cos(sample.pose.psi),
-            sample.pose.z - l2 * libm::sin(sample.pose.psi),
-        );
-        if elbow.z > ELBOW_LIFT_OFF_HEIGHT {
-            points[n] = elbow;
-            n += 1;
+        Method::Auto => {
+            let (phases, best) = fit_robust(path)?;
+            let grasp = best.elbow_path.along_forearm(0.0);
+            let disagreement = fit_hough(path, &phases, grasp).ok().map(|hough| {
+                libm::fabs(hough.forearm.radius - best.forearm.radius)
+                    .max(libm::fabs(hough.upper_arm.radius - best.upper_arm.radius))
+            });
+            (phases, best, disagreement)
         }
-    }
-    if n < MIN_PHASE_SAMPLES {
-        return Err(EstimateError::UpperArmPhaseTooShort);
-    }
-    let upper_arm = fit_circle_kasa(&points[..n]).map_err(EstimateError::UpperArmFit)?;
+    };
+    let grasp = fits.elbow_path.along_forearm(0.0);
+    let forearm_points = || grasp.points(path, phases.forearm.clone());
+    let elbow_points = || fits.elbow_path.points(path, phases.upper_arm.clone());
     Ok(ArmEstimate {
-        upper_arm_length: upper_arm.radius,
-        forearm_length: l2,
-        elbow: forearm.centre,
-        shoulder: upper_arm.centre,
+        upper_arm_length: fits.upper_arm.radius,
+        forearm_length: fits.forearm.radius,
+        elbow: fits.forearm.centre,
+        shoulder: fits.upper_arm.centre,
         method,
         evidence: FitEvidence {
-            forearm_arc,
-            upper_arm_arc: arc_about(&points[..n], upper_arm.centre),
-            forearm_residual,
-            upper_arm_residual: upper_arm.rms_residual(&points[..n]),
-            method_disagreement: None,
-            forearm_samples,
-            upper_arm_samples: n,
+            forearm_arc: fits.forearm.arc(forearm_points()),
+            upper_arm_arc: fits.upper_arm.arc(elbow_points()),
+            forearm_residual: fits.forearm.rms_residual(forearm_points()),
+            upper_arm_residual: fits.upper_arm.rms_residual(elbow_points()),
+            method_disagreement,
+            forearm_samples: phases.forearm.len(),
+            upper_arm_samples: phases.upper_arm.len(),
         },
     })
 }
 
-/// Angle between the first and last point seen from `centre` [rad, 0..π].
-fn arc_about(points: &[Point], centre: Point) -> f64 {
-    match (points.first(), points.last()) {
-        (Some(a), Some(b)) => {
-            let (ax, az) = (a.x - centre.x, a.z - centre.z);
-            let (bx, bz) = (b.x - centre.x, b.z - centre.z);
-            libm::fabs(libm::atan2(ax * bz - az * bx, ax * bx + az * bz))
+/// The paper's least squares (eq. 22-28): Kåsa on both phases.
+fn fit_ls(
+    path: &[PathSample],
+    phases: &Phases,
+    grasp: PointModel,
+) -> Result<PhaseFits, EstimateError> {
+    let forearm = fit_circle_kasa(grasp.points(path, phases.forearm.clone()))
+        .map_err(EstimateError::ForearmFit)?;
+    let elbow_path = grasp.along_forearm(forearm.radius);
+    let upper_arm = fit_circle_kasa(elbow_path.points(path, phases.upper_arm.clone()))
+        .map_err(EstimateError::UpperArmFit)?;
+    Ok(PhaseFits {
+        forearm,
+        upper_arm,
+        elbow_path,
+    })
+}
+
+/// The bounded Hough transform on both phases (see `hough.rs`).
+fn fit_hough(
+    path: &[PathSample],
+    phases: &Phases,
+    grasp: PointModel,
+) -> Result<PhaseFits, EstimateError> {
+    let sample_at = |first: usize, model: PointModel| {
+        move |offset: usize| {
+            let index = first.checked_add(offset)?;
+            let sample = path.get(index)?;
+            Some((
+                model.fit_point(index, sample).at(model.correction),
+                sample.pose.psi,
+            ))
         }
-        _ => 0.0,
+    };
+    let forearm =
+        hough_circle_normals(phases.forearm.len(), sample_at(phases.forearm.start, grasp))
+            .map_err(EstimateError::ForearmFit)?;
+    let elbow_path = grasp.along_forearm(forearm.radius);
+    let elbow_at = sample_at(phases.upper_arm.start, elbow_path);
+    let upper_arm = hough_circle_chords(phases.upper_arm.len(), |offset| {
+        elbow_at(offset).map(|(p, _)| p)
+    })
+    .map_err(EstimateError::UpperArmFit)?;
+    Ok(PhaseFits {
+        forearm,
+        upper_arm,
+        elbow_path,
+    })
+}
+
+/// The grasp model of a log: compliance and slip detected from the data
+/// (see `grasp.rs`), and the phases under that model.
+fn grasp_model(path: &[PathSample]) -> Result<(Phases, PointModel), EstimateError> {
+    let mut model = PointModel::GRASP;
+    let mut phases = detect_phases(path, &model)?;
+    model.correction.compliance = detect_compliance(path, phases.forearm.clone())?;
+    if model.correction.compliance != 0.0 {
+        phases = detect_phases(path, &model)?;
     }
+    if let Some(slipped) = detect_slip(path, &phases, &model)? {
+        model = slipped;
+        phases = detect_phases(path, &model)?;
+    }
+    Ok((phases, model))
+}
+
+/// The project's best fit: phase 1 by the robust forearm-pose model (grasp
+/// points, psi and wrench, with compliance and slip corrected, see
+/// `grasp.rs`), phase 2 by a Taubin start and a robust geometric refinement
+/// on the corrected elbow path.
+fn fit_robust(path: &[PathSample]) -> Result<(Phases, PhaseFits), EstimateError> {
+    let (phases, grasp) = grasp_model(path)?;
+    let pose = fit_forearm_pose(
+        path,
+        phases.forearm.clone(),
+        &grasp,
+        FreeCorrections::default(),
+    )?;
+    let forearm = Circle {
+        centre: pose.elbow,
+        radius: pose.forearm_length,
+    };
+    let elbow_path = grasp.along_forearm(forearm.radius);
+    let upper_arm = elbow_path
+        .robust_circle(path, phases.upper_arm.clone())
+        .map_err(EstimateError::UpperArmFit)?
+        .circle;
+    Ok((
+        phases,
+        PhaseFits {
+            forearm,
+            upper_arm,
+            elbow_path,
+        },
+    ))
 }

@@ -1,0 +1,188 @@
+//! Property tests of the estimators and the validator.
+
+use limb_kernel::estimation::{
+    estimate_arm, fit_circle_geometric, fit_circle_kasa, fit_circle_taubin, hough_circle_chords,
+    hough_circle_normals, ArmEstimate, Circle, FitEvidence, GraspCorrection, Method, PointModel,
+};
+use limb_kernel::geometry::{Point, Pose, Wrench};
+use limb_kernel::path::PathSample;
+use limb_kernel::validate::{validate, ValidationLimits};
+use proptest::prelude::*;
+
+/// Tolerance of the LS fits on noise-free arcs [m].
+const EXACT: f64 = 1e-4;
+
+/// Points of a noise-free arc and the forearm elevation whose normal
+/// (cos psi, −sin psi) points at the centre: p = c + r (−cos psi, sin psi).
+fn arc(centre: Point, radius: f64, start: f64, span: f64, n: usize) -> Vec<(Point, f64)> {
+    (0..n)
+        .map(|i| {
+            let psi = start + span * i as f64 / (n - 1) as f64;
+            (
+                Point::new(centre.x - radius * psi.cos(), centre.z + radius * psi.sin()),
+                psi,
+            )
+        })
+        .collect()
+}
+
+fn close(circle: Circle, centre: Point, radius: f64, tolerance: f64) -> bool {
+    (circle.radius - radius).abs() <= tolerance && circle.centre.distance(centre) <= tolerance
+}
+
+proptest! {
+    /// Any noise-free arc of ≥ 30° is recovered to 0.1 mm by Kåsa, Taubin and
+    /// the geometric fit, and by both bounded Hough variants (exact on
+    /// noise-free data, far inside their 1 mm grid).
+    #[test]
+    fn arcs_of_thirty_degrees_or_more_are_recovered(
+        cx in -0.5f64..0.5, cz in -0.5f64..0.5, radius in 0.05f64..0.5,
+        start in -3.2f64..3.2, span in std::f64::consts::FRAC_PI_6..5.5, n in 12usize..400,
+    ) {
+        let centre = Point::new(cx, cz);
+        let samples = arc(centre, radius, start, span, n);
+        let points = || samples.iter().map(|(p, _)| *p);
+        let kasa = fit_circle_kasa(points()).unwrap();
+        let taubin = fit_circle_taubin(points()).unwrap();
+        let geometric = fit_circle_geometric(points(), taubin).unwrap().circle;
+        let normals = hough_circle_normals(n, |i| samples.get(i).copied()).unwrap();
+        let chords = hough_circle_chords(n, |i| samples.get(i).map(|(p, _)| *p)).unwrap();
+        for (name, fit) in [("kasa", kasa), ("taubin", taubin), ("geometric", geometric),
+                            ("hough normals", normals), ("hough chords", chords)] {
+            prop_assert!(close(fit, centre, radius, EXACT), "{name}: {fit:?}");
+        }
+    }
+
+    /// The fast corrected point equals the fit point under the corrections.
+    #[test]
+    fn point_model_paths_agree(
+        x in -1.0f64..1.0, z in -1.0f64..1.0, psi in -3.2f64..3.2, fx in -50.0f64..50.0,
+        fz in -50.0f64..50.0, along in prop_oneof![Just(0.0), 0.0f64..0.5], compliance in 0.0f64..0.01,
+        slide in -0.02f64..0.02, ox in -0.02f64..0.02, oz in -0.02f64..0.02,
+        index in 0usize..10, slip_index in 0usize..10,
+    ) {
+        let model = PointModel {
+            forearm_length: along,
+            correction: GraspCorrection { compliance, slide, offset: Point::new(ox, oz) },
+            slip_index,
+        };
+        let sample = PathSample { time: 0.0, pose: Pose::new(x, z, psi), wrench: Wrench::new(fx, fz, 0.0) };
+        let fast = model.point(index, &sample);
+        let full = model.fit_point(index, &sample).at(model.correction);
+        prop_assert!(fast.distance(full) < 1e-12, "{fast:?} {full:?}");
+    }
+
+    /// The fits are total: any points give a circle with a finite positive
+    /// radius or a typed error.
+    #[test]
+    fn fits_never_panic(raw in prop::collection::vec((special(), special(), special()), 0..40)) {
+        let points: Vec<Point> = raw.iter().map(|(x, z, _)| Point::new(*x, *z)).collect();
+        let with_psi: Vec<(Point, f64)> = raw.iter().map(|(x, z, psi)| (Point::new(*x, *z), *psi)).collect();
+        let it = || points.iter().copied();
+        let fits = [
+            fit_circle_kasa(it()),
+            fit_circle_taubin(it()),
+            fit_circle_taubin(it()).and_then(|start| fit_circle_geometric(it(), start)).map(|f| f.circle),
+            hough_circle_normals(with_psi.len(), |i| with_psi.get(i).copied()),
+            hough_circle_chords(points.len(), |i| points.get(i).copied()),
+        ];
+        for circle in fits.into_iter().flatten() {
+            prop_assert!(circle.is_valid());
+        }
+    }
+
+    /// `estimate_arm` is total on arbitrary paths (NaN, infinities,
+    /// duplicates, a single point, all equal, empty).
+    #[test]
+    fn estimate_arm_never_panics(raw in prop::collection::vec(sample(), 0..200)) {
+        for method in [Method::Hough, Method::Ls, Method::Auto] {
+            if let Ok(e) = estimate_arm(&raw, method) {
+                prop_assert!(e.upper_arm_length.is_finite() && e.forearm_length.is_finite());
+            }
+        }
+    }
+
+    /// Whatever the estimate and grasp start, the default validator accepts
+    /// only models inside all its ranges.
+    #[test]
+    fn validator_never_accepts_a_model_outside_its_ranges(
+        l1 in -0.1f64..1.0, l2 in -0.1f64..1.0,
+        ex in -0.5f64..1.0, ez in -0.05f64..0.05, sx in -0.5f64..1.5, sz in -0.2f64..0.2,
+        arcs in (0.0f64..3.0, 0.0f64..3.0), residuals in (0.0f64..0.01, 0.0f64..0.01),
+        disagreement in prop::option::of(0.0f64..0.02),
+    ) {
+        let estimate = ArmEstimate {
+            upper_arm_length: l1,
+            forearm_length: l2,
+            elbow: Point::new(ex, ez),
+            shoulder: Point::new(sx, sz),
+            method: Method::Auto,
+            evidence: FitEvidence {
+                forearm_arc: arcs.0,
+                upper_arm_arc: arcs.1,
+                forearm_residual: residuals.0,
+                upper_arm_residual: residuals.1,
+                method_disagreement: disagreement,
+                forearm_samples: 100,
+                upper_arm_samples: 100,
+            },
+        };
+        let limits = ValidationLimits::default();
+        if validate(&estimate, Point::default(), &limits).is_ok() {
+            prop_assert!((limits.min_upper_arm_length..=limits.max_upper_arm_length).contains(&l1));
+            prop_assert!((limits.min_forearm_length..=limits.max_forearm_length).contains(&l2));
+            prop_assert!(arcs.0 >= limits.min_arc && arcs.1 >= limits.min_arc);
+            prop_assert!(residuals.0 <= limits.max_residual && residuals.1 <= limits.max_residual);
+            prop_assert!(disagreement.is_some() || !limits.require_method_agreement);
+            prop_assert!(disagreement.unwrap_or(0.0) <= limits.max_method_disagreement);
+            let elbow = Point::new(ex, ez);
+            prop_assert!((elbow.distance(Point::default()) - l2).abs() <= limits.max_geometry_mismatch);
+            prop_assert!((elbow.distance(Point::new(sx, sz)) - l1).abs() <= limits.max_geometry_mismatch);
+        }
+    }
+}
+
+/// Ordinary values mixed with NaN, infinities, zero and repeats.
+fn special() -> impl Strategy<Value = f64> {
+    prop_oneof![
+        4 => -1.0f64..1.0,
+        1 => Just(f64::NAN),
+        1 => Just(f64::INFINITY),
+        1 => Just(0.0),
+        1 => Just(0.25),
+    ]
+}
+
+fn sample() -> impl Strategy<Value = PathSample> {
+    (special(), special(), special(), special()).prop_map(|(t, x, z, psi)| PathSample {
+        time: t,
+        pose: Pose::new(x, z, psi),
+        wrench: Wrench::new(x, z, 0.0),
+    })
+}
+
+/// Degenerate inputs named in the requirements each give a typed error.
+#[test]
+fn degenerate_inputs_are_typed_errors() {
+    let at = |i: usize, x: f64, z: f64, psi: f64| PathSample {
+        time: i as f64 * 0.01,
+        pose: Pose::new(x, z, psi),
+        wrench: Wrench::ZERO,
+    };
+    let empty: Vec<PathSample> = Vec::new();
+    let single = vec![at(0, 0.0, 0.0, 0.0)];
+    let equal: Vec<_> = (0..500).map(|i| at(i, 0.1, 0.1, 0.3)).collect();
+    let line: Vec<_> = (0..500)
+        .map(|i| at(i, i as f64 * 1e-3, i as f64 * 1e-3, 0.3))
+        .collect();
+    let nan: Vec<_> = (0..500).map(|i| at(i, f64::NAN, 0.0, 0.3)).collect();
+    for path in [empty, single, equal, line, nan] {
+        for method in [Method::Hough, Method::Ls, Method::Auto] {
+            assert!(
+                estimate_arm(&path, method).is_err(),
+                "{method:?} {:?}",
+                path.first()
+            );
+        }
+    }
+}
