@@ -32,6 +32,18 @@ impl CliError {
 pub fn print_json<T: serde::Serialize>(value: &T) -> Result<(), CliError> {
     let text = serde_json::to_string_pretty(value)
         .map_err(|error| CliError::Internal(format!("serialising JSON: {error}")))?;
-    println!("{text}");
-    Ok(())
+    emit(&(text + "\n"))
+}
+
+/// Writes `text` to stdout in one piece. A reader that went away (broken
+/// pipe, as in `limb … | head`) is not an error; any other write failure is.
+pub fn emit(text: &str) -> Result<(), CliError> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Err(error) if error.kind() != std::io::ErrorKind::BrokenPipe => {
+            Err(CliError::Internal(format!("writing to stdout: {error}")))
+        }
+        _ => Ok(()),
+    }
 }

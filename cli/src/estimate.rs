@@ -2,7 +2,7 @@
 //! (`../shared/spec/cli.md`): fits the arm from an estimation-motion log.
 //! Ground-truth columns of the log are never read.
 
-use crate::error::{print_json, CliError};
+use crate::error::{emit, print_json, CliError};
 use crate::robot_log;
 use limb_kernel::estimation::{estimate_arm, FitEvidence, Method};
 use limb_kernel::path::PATH_CAPACITY;
@@ -73,17 +73,16 @@ pub fn run(log: &Path, method: MethodArg, json: bool) -> Result<(), CliError> {
     if json {
         return print_json(&report);
     }
-    println!("method    {:?}", report.method);
-    println!("l1        {:.4} m (upper arm)", report.l1);
-    println!("l2        {:.4} m (forearm, elbow to grasp)", report.l2);
-    println!(
-        "elbow     ({:.4}, {:.4}) m, frame S, t = 0",
-        report.elbow[0], report.elbow[1]
-    );
-    println!(
-        "shoulder  ({:.4}, {:.4}) m, frame S",
-        report.shoulder[0], report.shoulder[1]
-    );
-    println!("samples   {}", report.samples);
-    Ok(())
+    emit(&format!(
+        "method    {:?}\nl1        {:.4} m (upper arm)\nl2        {:.4} m (forearm, elbow to grasp)\n\
+         elbow     ({:.4}, {:.4}) m, frame S, t = 0\nshoulder  ({:.4}, {:.4}) m, frame S\nsamples   {}\n",
+        report.method,
+        report.l1,
+        report.l2,
+        report.elbow[0],
+        report.elbow[1],
+        report.shoulder[0],
+        report.shoulder[1],
+        report.samples
+    ))
 }

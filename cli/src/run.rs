@@ -14,7 +14,7 @@
 //! Time: the kernel runs at `--rate` (1 kHz, the FRI rate, by default); the
 //! plant integrates at its own 0.5 ms step in between.
 
-use crate::error::{print_json, CliError};
+use crate::error::{emit, print_json, CliError};
 use limb_kernel::arm::JointAngles;
 use limb_kernel::geometry::Point;
 use limb_kernel::motion::SetPoint;
@@ -247,15 +247,18 @@ fn model_report(arm: &limb_kernel::validate::ValidatedArm, truth: &Truth) -> Mod
     }
 }
 
-/// Prints the report for a person.
-pub fn print_human(report: &SessionReport, header: &str) {
-    println!("{header}");
+/// The report for a person.
+pub fn human(report: &SessionReport, header: &str) -> String {
+    use std::fmt::Write;
+    let mut out = String::new();
+    let _ = writeln!(out, "{header}");
     for line in &report.events {
-        println!("  {:>8.3} s  {}", line.time, line.what);
+        let _ = writeln!(out, "  {:>8.3} s  {}", line.time, line.what);
     }
     let t = &report.truth;
-    match &report.model {
-        Some(m) => println!(
+    let _ = match &report.model {
+        Some(m) => writeln!(
+            out,
             "model: l1 {:.4} m (truth {:.4}, {:+.2} mm)  l2 {:.4} m (truth {:.4}, {:+.2} mm)  \
              shoulder ({:.4}, {:.4}) m (truth ({:.4}, {:.4}), {:.2} mm off)",
             m.l1,
@@ -270,17 +273,18 @@ pub fn print_human(report: &SessionReport, header: &str) {
             t.shoulder[1],
             m.error_shoulder * 1e3
         ),
-        None => println!("model: none validated"),
-    }
+        None => writeln!(out, "model: none validated"),
+    };
     if report.monitor_events.is_empty() {
-        println!("monitor events: none");
+        let _ = writeln!(out, "monitor events: none");
     } else {
-        println!("monitor events:");
+        let _ = writeln!(out, "monitor events:");
         for line in &report.monitor_events {
-            println!("  {:>8.3} s  {}", line.time, line.what);
+            let _ = writeln!(out, "  {:>8.3} s  {}", line.time, line.what);
         }
     }
-    println!(
+    let _ = writeln!(
+        out,
         "final state: {:?} after {} kernel steps ({} with saturation); session {}",
         report.final_state,
         report.steps,
@@ -291,6 +295,7 @@ pub fn print_human(report: &SessionReport, header: &str) {
             "ended early"
         }
     );
+    out
 }
 
 /// The reference plant of `limb-sim` behind [`ClosedLoopPlant`].
@@ -393,7 +398,6 @@ pub fn output(report: &SessionReport, args: &RunArgs, header: &str) -> Result<()
     if args.json {
         print_json(report)
     } else {
-        print_human(report, header);
-        Ok(())
+        emit(&human(report, header))
     }
 }
