@@ -4,6 +4,7 @@
 
 mod config;
 mod error;
+mod zenoh;
 
 use clap::{Parser, Subcommand};
 use error::CliError;
@@ -23,12 +24,15 @@ struct Cli {
 enum Command {
     /// Print the embedded default kernel configuration as JSON.
     Config,
+    /// Supervise a kernel over Zenoh: run a node, send commands, query.
+    Zenoh(zenoh::ZenohArgs),
 }
 
 fn main() {
     let cli = Cli::parse();
     let result: Result<(), CliError> = match cli.command {
         Command::Config => config::run(),
+        Command::Zenoh(args) => zenoh::run(args),
     };
     if let Err(error) = result {
         eprintln!("limb: {error}");

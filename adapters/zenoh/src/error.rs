@@ -23,6 +23,10 @@ pub enum AdapterError {
     /// A thread could not be started.
     #[error("thread: {0}")]
     Thread(#[from] std::io::Error),
+    /// The control loop thread panicked (a bug: the loop has no panicking
+    /// path on purpose).
+    #[error("the control loop panicked")]
+    LoopPanicked,
     /// No answer arrived in time.
     #[error("timed out waiting for {0}")]
     Timeout(&'static str),

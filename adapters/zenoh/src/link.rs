@@ -337,11 +337,7 @@ impl Supervision {
 
     fn refuse(&mut self, sequence: Option<u64>, reason: RefuseReason) {
         tracing::warn!(?sequence, ?reason, "command refused");
-        self.ack(Ack {
-            subject: AckSubject::Request,
-            sequence,
-            outcome: AckOutcome::Refused { reason },
-        });
+        self.ack(Ack::refused(sequence, reason));
     }
 
     fn ack(&mut self, ack: Ack) {
@@ -431,10 +427,14 @@ impl Link {
             declare_requests(&session, &keys, settings, commands_tx, outbound.clone())?,
             declare_heartbeat(&session, &keys, settings, &shared)?,
         ];
-        let queryables = [keys.state(), keys.config(), keys.arm()]
-            .into_iter()
-            .map(|key| declare_queryable(&session, key, format, &snapshot))
-            .collect::<Result<Vec<_>, _>>()?;
+        let queryables = [
+            (keys.state(), Answer::State),
+            (keys.config(), Answer::Config),
+            (keys.arm(), Answer::Arm),
+        ]
+        .into_iter()
+        .map(|(key, answer)| declare_queryable(&session, key, answer, format, &snapshot))
+        .collect::<Result<Vec<_>, _>>()?;
 
         let supervision = Supervision {
             shared,
@@ -603,13 +603,8 @@ fn declare_requests(
     let key_expr = keys.request();
     let refuse = move |sequence, reason: RefuseReason| {
         tracing::warn!(?sequence, ?reason, "command refused");
-        let ack = Ack {
-            subject: AckSubject::Request,
-            sequence,
-            outcome: AckOutcome::Refused { reason },
-        };
         // A full queue already drops telemetry; the sender's ack times out.
-        let _ = outbound.try_send(Outbound::Ack(ack));
+        let _ = outbound.try_send(Outbound::Ack(Ack::refused(sequence, reason)));
     };
     Ok(session
         .declare_subscriber(key_expr.clone())
@@ -685,28 +680,38 @@ fn declare_heartbeat(
         .wait()?)
 }
 
+/// What a queryable answers with.
+#[derive(Clone, Copy, Debug)]
+enum Answer {
+    State,
+    Config,
+    Arm,
+}
+
 fn declare_queryable(
     session: &zenoh::Session,
     key: String,
+    answer: Answer,
     format: WireFormat,
     snapshot: &Arc<Mutex<Option<StateSnapshot>>>,
 ) -> Result<zenoh::query::Queryable<()>, AdapterError> {
     let snapshot = Arc::clone(snapshot);
-    let suffix = key.rsplit("/@v1/").next().unwrap_or_default().to_owned();
     Ok(session
         .declare_queryable(key)
         .callback(move |query| {
             let current = snapshot.lock().ok().and_then(|guard| *guard);
-            let bytes = match (current, suffix.as_str()) {
+            let encoded = match (current, answer) {
                 (None, _) => Err("no state yet"),
-                (Some(s), "state") => format.encode(&s).map_err(|_| "encoding failed"),
-                (Some(s), "config") => format.encode(&s.config).map_err(|_| "encoding failed"),
-                (Some(StateSnapshot { arm: Some(a), .. }), _) => {
-                    format.encode(&a).map_err(|_| "encoding failed")
+                (Some(s), Answer::State) => format.encode(&s).map_err(|_| "encoding failed"),
+                (Some(s), Answer::Config) => {
+                    format.encode(&s.config).map_err(|_| "encoding failed")
                 }
-                (Some(_), _) => Err("no validated arm model"),
+                (Some(s), Answer::Arm) => match s.arm {
+                    Some(arm) => format.encode(&arm).map_err(|_| "encoding failed"),
+                    None => Err("no validated arm model"),
+                },
             };
-            let reply = match bytes {
+            let reply = match encoded {
                 Ok(bytes) => query
                     .reply(query.key_expr().clone(), bytes)
                     .encoding(format.encoding())

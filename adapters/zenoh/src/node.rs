@@ -87,14 +87,14 @@ impl Node {
     /// Stops the loop, closes the link and returns the kernel.
     ///
     /// # Errors
-    /// [`AdapterError::Setting`] if the loop thread panicked (a bug), or a
+    /// [`AdapterError::LoopPanicked`] if the loop thread panicked (a bug), or a
     /// Zenoh failure while closing.
     pub fn shutdown(self) -> Result<Box<Kernel>, AdapterError> {
         self.stop.store(true, Ordering::Release);
         let kernel = self
             .control_loop
             .join()
-            .map_err(|_| AdapterError::Setting("the control loop panicked"))?;
+            .map_err(|_| AdapterError::LoopPanicked)?;
         self.link.close()?;
         Ok(kernel)
     }

@@ -129,7 +129,7 @@ impl Supervisor {
         let sequence = self.next_sequence;
         self.next_sequence += 1;
         let payload = self.format.encode(&CommandMessage { sequence, command })?;
-        self.send_raw(&payload, Some(&self.key.clone()))?;
+        self.send_raw(&payload, Some(&self.key))?;
         Ok(sequence)
     }
 

@@ -246,6 +246,17 @@ pub struct Ack {
     pub outcome: AckOutcome,
 }
 
+impl Ack {
+    /// A refusal of a request with `sequence` (when it could be read).
+    pub fn refused(sequence: Option<u64>, reason: RefuseReason) -> Self {
+        Self {
+            subject: AckSubject::Request,
+            sequence,
+            outcome: AckOutcome::Refused { reason },
+        }
+    }
+}
+
 /// A kernel trace event on `telemetry/event`, numbered so a reader sees
 /// loss or reordering.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]

@@ -3,12 +3,15 @@
 
 mod common;
 
-use common::{connect, rig, wait_until, RigOptions, TIMEOUT};
+use common::{connect, link_settings, rig, wait_until, RigOptions, TIMEOUT};
 use limb_kernel::config::{Interval, SafetyLimits};
 use limb_kernel::kernel::RefusalReason;
 use limb_kernel::{KernelConfig, StateKind};
 use limb_verification::scenario::TARGET;
 use limb_zenoh::auth::CommandKey;
+use limb_zenoh::link::Link;
+use limb_zenoh::sensor::{ScriptedLift, SensorSource};
+use limb_zenoh::session::{free_loopback_port, peer_config};
 use limb_zenoh::wire::{
     AckOutcome, AckSubject, ArmModel, CommandMessage, EventMessage, RefuseReason, StateSnapshot,
     SupervisorCommand, WireFormat,
@@ -288,4 +291,39 @@ fn events_arrive_in_order_without_loss() {
     let expected: Vec<u64> = (first..first + received.len() as u64).collect();
     assert_eq!(received, expected);
     rig.close();
+}
+
+/// Attach: another adapter's loop owns the kernel and calls the hooks
+/// around its own steps.
+#[test]
+fn another_loop_can_attach_the_supervision_hooks() {
+    let mut lift = ScriptedLift::reference();
+    let (mut kernel, origin) = lift.kernel_after_lift();
+    let endpoint = format!("tcp/127.0.0.1:{}", free_loopback_port().unwrap());
+    let config = peer_config(std::slice::from_ref(&endpoint), &[], 1000).unwrap();
+    let settings = link_settings(&RigOptions::default());
+    let (link, mut supervision) = Link::open(config, &settings, *kernel.config()).unwrap();
+    let mut supervisor = connect(&endpoint, settings.format, common::key());
+    let sequence = supervisor
+        .send(SupervisorCommand::ApproveManipulation { target: TARGET })
+        .unwrap();
+    let epoch = supervision.epoch();
+    let mut ack = None;
+    // The other adapter's loop: bounded to 500 steps of about 5 ms.
+    for _ in 0..500 {
+        let now = origin + epoch.elapsed().as_secs_f64();
+        supervision.before_step(&mut kernel, now);
+        let frame = lift.frame(now);
+        let command = kernel.step(&frame, now);
+        supervision.after_step(&mut kernel, &frame, &command, now);
+        let wait = Duration::from_millis(5);
+        if let Ok(found) = supervisor.wait_ack(|a| a.sequence == Some(sequence), wait) {
+            ack = Some(found);
+            break;
+        }
+    }
+    assert_eq!(ack.unwrap().outcome, accepted(StateKind::Manipulate));
+    assert_eq!(kernel.state().kind(), StateKind::Manipulate);
+    supervisor.close().unwrap();
+    link.close().unwrap();
 }

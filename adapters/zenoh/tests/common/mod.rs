@@ -49,6 +49,22 @@ pub fn key() -> CommandKey {
     CommandKey::new(SECRET).unwrap()
 }
 
+/// The node's link settings for `options`: every sample published, status
+/// every 50 ms.
+pub fn link_settings(options: &RigOptions) -> LinkSettings {
+    LinkSettings {
+        robot_id: ROBOT.into(),
+        format: options.format,
+        command_key: key(),
+        sample_decimation: 1,
+        status_period: 0.05,
+        liveness: LivenessPolicy {
+            timeout: options.liveness_timeout,
+            on_loss: options.on_loss,
+        },
+    }
+}
+
 /// A node (in Validated after the scripted lift, or in Grasp) and a
 /// connected supervisor whose commands are routed.
 pub fn rig(options: RigOptions) -> Rig {
@@ -60,17 +76,7 @@ pub fn rig(options: RigOptions) -> Rig {
     };
     let port = free_loopback_port().unwrap();
     let endpoint = format!("tcp/127.0.0.1:{port}");
-    let settings = LinkSettings {
-        robot_id: ROBOT.into(),
-        format: options.format,
-        command_key: key(),
-        sample_decimation: 1,
-        status_period: 0.05,
-        liveness: LivenessPolicy {
-            timeout: options.liveness_timeout,
-            on_loss: options.on_loss,
-        },
-    };
+    let settings = link_settings(&options);
     let node = Node::spawn(
         peer_config(std::slice::from_ref(&endpoint), &[], 1000).unwrap(),
         &settings,
