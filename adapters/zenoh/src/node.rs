@@ -30,12 +30,15 @@ pub struct LoopSettings {
     pub origin: f64,
 }
 
-/// A running node: control loop plus Zenoh link.
+/// A running node: control loop plus Zenoh link. Dropping it without
+/// [`Node::shutdown`] stops the loop too (without waiting for it).
 pub struct Node {
-    link: Link,
+    /// `Some` until shutdown.
+    link: Option<Link>,
     view: LoopView,
     stop: Arc<AtomicBool>,
-    control_loop: JoinHandle<Box<Kernel>>,
+    /// `Some` until shutdown.
+    control_loop: Option<JoinHandle<Box<Kernel>>>,
 }
 
 impl Node {
@@ -67,10 +70,10 @@ impl Node {
                 move || run(kernel, source, supervision, loop_settings, &stop)
             })?;
         Ok(Self {
-            link,
+            link: Some(link),
             view,
             stop,
-            control_loop,
+            control_loop: Some(control_loop),
         })
     }
 
@@ -79,9 +82,9 @@ impl Node {
         &self.view
     }
 
-    /// The node's Zenoh session.
-    pub fn session(&self) -> &zenoh::Session {
-        self.link.session()
+    /// The node's Zenoh session (`None` only during shutdown).
+    pub fn session(&self) -> Option<&zenoh::Session> {
+        self.link.as_ref().map(Link::session)
     }
 
     /// Stops the loop, closes the link and returns the kernel.
@@ -89,14 +92,24 @@ impl Node {
     /// # Errors
     /// [`AdapterError::LoopPanicked`] if the loop thread panicked (a bug), or a
     /// Zenoh failure while closing.
-    pub fn shutdown(self) -> Result<Box<Kernel>, AdapterError> {
+    pub fn shutdown(mut self) -> Result<Box<Kernel>, AdapterError> {
         self.stop.store(true, Ordering::Release);
         let kernel = self
             .control_loop
+            .take()
+            .ok_or(AdapterError::LoopPanicked)?
             .join()
             .map_err(|_| AdapterError::LoopPanicked)?;
-        self.link.close()?;
+        if let Some(link) = self.link.take() {
+            link.close()?;
+        }
         Ok(kernel)
+    }
+}
+
+impl Drop for Node {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Release);
     }
 }
 

@@ -257,7 +257,8 @@ impl Supervisor {
         Err(AdapterError::Timeout("a query answer"))
     }
 
-    /// Stops the heartbeat and closes the session.
+    /// Stops the heartbeat and closes the session (dropping the supervisor
+    /// stops the heartbeat too).
     ///
     /// # Errors
     /// [`AdapterError::Zenoh`] on a close failure.
@@ -265,5 +266,11 @@ impl Supervisor {
         self.stop_heartbeat();
         self.session.close().wait()?;
         Ok(())
+    }
+}
+
+impl Drop for Supervisor {
+    fn drop(&mut self) {
+        self.stop_heartbeat();
     }
 }
