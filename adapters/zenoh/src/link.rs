@@ -58,8 +58,8 @@ pub enum OnSupervisorLoss {
 /// a silence longer than `timeout` is a loss.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct LivenessPolicy {
-    /// Longest silence accepted [s as a Duration]; e.g. 3 heartbeat
-    /// periods (150 ms at 20 Hz).
+    /// Longest accepted silence between valid heartbeats, e.g. 150-250 ms
+    /// for a 20 Hz heartbeat (3-5 periods).
     pub timeout: Duration,
     /// What to do on a loss.
     pub on_loss: OnSupervisorLoss,
