@@ -7,6 +7,7 @@ mod error;
 mod estimate;
 mod robot_log;
 mod run;
+mod zenoh;
 
 use clap::{Parser, Subcommand};
 use error::CliError;
@@ -40,6 +41,8 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Supervise a kernel over Zenoh: run a node, send commands, query.
+    Zenoh(zenoh::ZenohArgs),
 }
 
 fn main() {
@@ -48,6 +51,7 @@ fn main() {
         Command::Run(args) => run::run(&args),
         Command::Config => config::run(),
         Command::Estimate { log, method, json } => estimate::run(&log, method, json),
+        Command::Zenoh(args) => zenoh::run(args),
     };
     if let Err(error) = result {
         eprintln!("limb: {error}");

@@ -1,0 +1,329 @@
+//! Commands over real Zenoh sessions: accepted, refused and acknowledged;
+//! authorisation; queryables; in-order reliable telemetry.
+
+mod common;
+
+use common::{connect, link_settings, rig, wait_until, RigOptions, TIMEOUT};
+use limb_kernel::config::{Interval, SafetyLimits};
+use limb_kernel::kernel::RefusalReason;
+use limb_kernel::{KernelConfig, StateKind};
+use limb_verification::scenario::TARGET;
+use limb_zenoh::auth::CommandKey;
+use limb_zenoh::link::Link;
+use limb_zenoh::sensor::{ScriptedLift, SensorSource};
+use limb_zenoh::session::{free_loopback_port, peer_config};
+use limb_zenoh::wire::{
+    AckOutcome, AckSubject, ArmModel, CommandMessage, EventMessage, RefuseReason, StateSnapshot,
+    SupervisorCommand, WireFormat,
+};
+use std::time::Duration;
+use zenoh::Wait;
+
+fn accepted(state: StateKind) -> AckOutcome {
+    AckOutcome::Accepted { state }
+}
+
+fn refused_by_kernel(outcome: &AckOutcome) -> Option<RefusalReason> {
+    match outcome {
+        AckOutcome::Refused {
+            reason: RefuseReason::Kernel { refusal },
+        } => Some(refusal.reason),
+        _ => None,
+    }
+}
+
+#[test]
+fn commands_go_through_the_kernel_guards_and_are_acknowledged() {
+    let mut rig = rig(RigOptions::default());
+    let s = &mut rig.supervisor;
+    assert_eq!(rig.node.view().state(), Some(StateKind::Validated));
+
+    let ack = s
+        .request(SupervisorCommand::FinishManipulation, TIMEOUT)
+        .unwrap();
+    assert_eq!(
+        refused_by_kernel(&ack.outcome),
+        Some(RefusalReason::NotAllowedInState)
+    );
+    let approve = SupervisorCommand::ApproveManipulation { target: TARGET };
+    let ack = s.request(approve, TIMEOUT).unwrap();
+    assert_eq!(ack.subject, AckSubject::Request);
+    assert_eq!(ack.outcome, accepted(StateKind::Manipulate));
+    let ack = s
+        .request(SupervisorCommand::FinishManipulation, TIMEOUT)
+        .unwrap();
+    assert_eq!(ack.outcome, accepted(StateKind::Validated));
+
+    // A target outside the joint limits is the kernel's to refuse.
+    let mut far = TARGET;
+    far.elbow_flexion = 3.0;
+    let ack = s
+        .request(
+            SupervisorCommand::ApproveManipulation { target: far },
+            TIMEOUT,
+        )
+        .unwrap();
+    assert!(matches!(
+        refused_by_kernel(&ack.outcome),
+        Some(RefusalReason::Target(_))
+    ));
+
+    let ack = s
+        .request(
+            SupervisorCommand::UpdateLimits {
+                limits: SafetyLimits::default(),
+            },
+            TIMEOUT,
+        )
+        .unwrap();
+    assert_eq!(
+        ack.outcome,
+        AckOutcome::Refused {
+            reason: RefuseReason::LimitsFixedAtRunTime
+        }
+    );
+    let bad = SafetyLimits {
+        workspace_x: Interval::new(1.0, 0.0),
+        ..SafetyLimits::default()
+    };
+    let ack = s
+        .request(SupervisorCommand::UpdateLimits { limits: bad }, TIMEOUT)
+        .unwrap();
+    assert!(matches!(
+        ack.outcome,
+        AckOutcome::Refused {
+            reason: RefuseReason::InvalidLimits { .. }
+        }
+    ));
+
+    let ack = s.request(SupervisorCommand::Stop, TIMEOUT).unwrap();
+    assert_eq!(ack.outcome, accepted(StateKind::SafeStop));
+    let ack = s.request(SupervisorCommand::Reset, TIMEOUT).unwrap();
+    assert_eq!(ack.outcome, accepted(StateKind::Grasp));
+    assert!(wait_until(TIMEOUT, || rig.node.view().state()
+        == Some(StateKind::Grasp))
+    .is_some());
+    rig.close();
+}
+
+#[test]
+fn malformed_replayed_and_unsigned_commands_change_nothing() {
+    let rig = rig(RigOptions::default());
+    let s = &rig.supervisor;
+    let key = common::key();
+    let is_request_refusal = |ack: &limb_zenoh::wire::Ack| {
+        ack.subject == AckSubject::Request && matches!(ack.outcome, AckOutcome::Refused { .. })
+    };
+
+    for bad in [
+        &b"{not json"[..],
+        br#"{"sequence": 1, "command": {"command": "fly"}}"#,
+    ] {
+        s.send_raw(bad, Some(&key)).unwrap();
+        let ack = s.wait_ack(is_request_refusal, TIMEOUT).unwrap();
+        assert!(matches!(
+            ack.outcome,
+            AckOutcome::Refused {
+                reason: RefuseReason::Malformed { .. }
+            }
+        ));
+    }
+
+    let stop = WireFormat::Json
+        .encode(&CommandMessage {
+            sequence: 5,
+            command: SupervisorCommand::Stop,
+        })
+        .unwrap();
+    s.send_raw(&stop, None).unwrap();
+    let ack = s.wait_ack(is_request_refusal, TIMEOUT).unwrap();
+    assert_eq!(ack.sequence, Some(5));
+    assert!(matches!(
+        ack.outcome,
+        AckOutcome::Refused {
+            reason: RefuseReason::Unauthorised
+        }
+    ));
+
+    // A signed Reset, then the same bytes again: the copy is a replay.
+    let reset = WireFormat::Json
+        .encode(&CommandMessage {
+            sequence: 9,
+            command: SupervisorCommand::Reset,
+        })
+        .unwrap();
+    s.send_raw(&reset, Some(&key)).unwrap();
+    let first = s.wait_ack(|a| a.sequence == Some(9), TIMEOUT).unwrap();
+    assert!(refused_by_kernel(&first.outcome).is_some());
+    s.send_raw(&reset, Some(&key)).unwrap();
+    let replay = s.wait_ack(|a| a.sequence == Some(9), TIMEOUT).unwrap();
+    assert_eq!(
+        replay.outcome,
+        AckOutcome::Refused {
+            reason: RefuseReason::Replayed { last_accepted: 9 }
+        }
+    );
+    assert_eq!(rig.node.view().state(), Some(StateKind::Validated));
+    rig.close();
+}
+
+/// Security: a session without the command key cannot approve a
+/// manipulation, but its emergency stop still stops the robot.
+#[test]
+fn an_unauthorised_approval_is_refused_while_its_emergency_stop_works() {
+    let rig = rig(RigOptions::default());
+    let intruder_key = CommandKey::new(b"not the robot's secret key!!").unwrap();
+    let mut intruder = connect(&rig.endpoint, rig.format, intruder_key);
+    let ack = intruder
+        .request(
+            SupervisorCommand::ApproveManipulation { target: TARGET },
+            TIMEOUT,
+        )
+        .unwrap();
+    assert_eq!(
+        ack.outcome,
+        AckOutcome::Refused {
+            reason: RefuseReason::Unauthorised
+        }
+    );
+    std::thread::sleep(Duration::from_millis(20));
+    assert_eq!(rig.node.view().state(), Some(StateKind::Validated));
+
+    let sequence = intruder.emergency_stop().unwrap();
+    let ack = intruder
+        .wait_ack(|a| a.subject == AckSubject::EmergencyStop, TIMEOUT)
+        .unwrap();
+    assert_eq!(ack.sequence, Some(sequence));
+    assert_eq!(ack.outcome, accepted(StateKind::SafeStop));
+    assert!(wait_until(TIMEOUT, || rig.node.view().state()
+        == Some(StateKind::SafeStop))
+    .is_some());
+    intruder.close().unwrap();
+    rig.close();
+}
+
+#[test]
+fn queryables_answer_state_configuration_and_arm_model() {
+    for format in [WireFormat::Json, WireFormat::Cbor] {
+        let rig = rig(RigOptions {
+            format,
+            ..RigOptions::default()
+        });
+        let s = &rig.supervisor;
+        let keys = s.keys().clone();
+        let snapshot = (0..100)
+            .find_map(|_| {
+                std::thread::sleep(Duration::from_millis(10));
+                s.query::<StateSnapshot>(&keys.state(), TIMEOUT).ok()
+            })
+            .unwrap();
+        assert_eq!(snapshot.status.state, StateKind::Validated);
+        assert_eq!(snapshot.config, KernelConfig::default());
+        let arm: ArmModel = s.query(&keys.arm(), TIMEOUT).unwrap();
+        assert_eq!(Some(arm), snapshot.arm);
+        // The scripted lift's arm: l1 = 0.30 m, l2 = 0.20 m.
+        assert!((arm.upper_arm_length - 0.30).abs() < 0.02, "{arm:?}");
+        assert!((arm.forearm_length - 0.20).abs() < 0.002, "{arm:?}");
+        let config: KernelConfig = s.query(&keys.config(), TIMEOUT).unwrap();
+        assert_eq!(config, KernelConfig::default());
+        rig.close();
+    }
+}
+
+/// Reliable telemetry: every event, in order, none lost (CBOR).
+#[test]
+fn events_arrive_in_order_without_loss() {
+    const COMMANDS: usize = 60;
+    let mut rig = rig(RigOptions {
+        format: WireFormat::Cbor,
+        ..RigOptions::default()
+    });
+    let (tx, events) = std::sync::mpsc::channel();
+    let format = rig.format;
+    let _subscriber = rig
+        .supervisor
+        .session()
+        .declare_subscriber(rig.supervisor.keys().event())
+        .callback(move |sample| {
+            let event = format.decode::<EventMessage>(&sample.payload().to_bytes());
+            let _ = tx.send(event.map(|e| e.sequence).ok());
+        })
+        .wait()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(100));
+    // A burst larger than the loop's command queue: each command is
+    // acknowledged, as a kernel refusal (one kernel event each) or as busy.
+    let mut pending = std::collections::HashSet::new();
+    for _ in 0..COMMANDS {
+        pending.insert(rig.supervisor.send(SupervisorCommand::Reset).unwrap());
+    }
+    let mut kernel_refusals = 0;
+    let mut busy = 0;
+    while !pending.is_empty() {
+        let ack = rig
+            .supervisor
+            .wait_ack(
+                |a| a.sequence.is_some_and(|s| pending.contains(&s)),
+                TIMEOUT,
+            )
+            .unwrap();
+        ack.sequence.map(|s| pending.remove(&s));
+        match ack.outcome {
+            AckOutcome::Refused {
+                reason: RefuseReason::Busy,
+            } => busy += 1,
+            outcome => {
+                assert!(refused_by_kernel(&outcome).is_some(), "{outcome:?}");
+                kernel_refusals += 1;
+            }
+        }
+    }
+    assert_eq!(kernel_refusals + busy, COMMANDS);
+    assert!(kernel_refusals >= limb_zenoh::link::COMMAND_QUEUE);
+    std::thread::sleep(Duration::from_millis(100));
+    let received: Vec<u64> = events.try_iter().map(Option::unwrap).collect();
+    assert!(
+        received.len() >= kernel_refusals,
+        "{} events",
+        received.len()
+    );
+    let first = received[0];
+    let expected: Vec<u64> = (first..first + received.len() as u64).collect();
+    assert_eq!(received, expected);
+    rig.close();
+}
+
+/// Attach: another adapter's loop owns the kernel and calls the hooks
+/// around its own steps.
+#[test]
+fn another_loop_can_attach_the_supervision_hooks() {
+    let mut lift = ScriptedLift::reference();
+    let (mut kernel, origin) = lift.kernel_after_lift();
+    let endpoint = format!("tcp/127.0.0.1:{}", free_loopback_port().unwrap());
+    let config = peer_config(std::slice::from_ref(&endpoint), &[], 1000).unwrap();
+    let settings = link_settings(&RigOptions::default());
+    let (link, mut supervision) = Link::open(config, &settings, *kernel.config()).unwrap();
+    let mut supervisor = connect(&endpoint, settings.format, common::key());
+    let sequence = supervisor
+        .send(SupervisorCommand::ApproveManipulation { target: TARGET })
+        .unwrap();
+    let epoch = supervision.epoch();
+    let mut ack = None;
+    // The other adapter's loop: bounded to 500 steps of about 5 ms.
+    for _ in 0..500 {
+        let now = origin + epoch.elapsed().as_secs_f64();
+        supervision.before_step(&mut kernel, now);
+        let frame = lift.frame(now);
+        let command = kernel.step(&frame, now);
+        supervision.after_step(&mut kernel, &frame, &command, now);
+        let wait = Duration::from_millis(5);
+        if let Ok(found) = supervisor.wait_ack(|a| a.sequence == Some(sequence), wait) {
+            ack = Some(found);
+            break;
+        }
+    }
+    assert_eq!(ack.unwrap().outcome, accepted(StateKind::Manipulate));
+    assert_eq!(kernel.state().kind(), StateKind::Manipulate);
+    supervisor.close().unwrap();
+    link.close().unwrap();
+}

@@ -1,0 +1,276 @@
+//! `limb zenoh ...`: run a supervised node on the synthetic lift, send a
+//! supervisory command or an emergency stop, query a node. The wire
+//! contract is `adapters/zenoh/README.md`.
+//!
+//! ```sh
+//! limb zenoh node  --robot arm1 --listen tcp/127.0.0.1:7447 --key-file key --seconds 60
+//! limb zenoh send  --robot arm1 --connect tcp/127.0.0.1:7447 --key-file key approve 0.6 0.8
+//! limb zenoh estop --robot arm1 --connect tcp/127.0.0.1:7447
+//! limb zenoh query --robot arm1 --connect tcp/127.0.0.1:7447 state
+//! ```
+
+use crate::error::{print_json, CliError};
+use clap::{Args, Subcommand, ValueEnum};
+use limb_kernel::arm::JointAngles;
+use limb_zenoh::auth::CommandKey;
+use limb_zenoh::link::{LinkSettings, LivenessPolicy, OnSupervisorLoss};
+use limb_zenoh::node::{LoopSettings, Node};
+use limb_zenoh::sensor::ScriptedLift;
+use limb_zenoh::session::peer_config;
+use limb_zenoh::supervisor::Supervisor;
+use limb_zenoh::wire::{SupervisorCommand, WireFormat};
+use limb_zenoh::AdapterError;
+use std::path::PathBuf;
+use std::time::Duration;
+
+/// How long a command waits for its ack or a query for its answer.
+const ANSWER_TIMEOUT: Duration = Duration::from_secs(3);
+/// Zenoh lease [ms]: a dead peer is noticed after about this long.
+const LEASE_MS: u64 = 1000;
+
+/// `limb zenoh` arguments.
+#[derive(Args)]
+pub struct ZenohArgs {
+    #[command(subcommand)]
+    action: Action,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum Format {
+    Json,
+    Cbor,
+}
+
+impl From<Format> for WireFormat {
+    fn from(format: Format) -> Self {
+        match format {
+            Format::Json => WireFormat::Json,
+            Format::Cbor => WireFormat::Cbor,
+        }
+    }
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum Policy {
+    Stop,
+    Continue,
+}
+
+/// Where and as whom.
+#[derive(Args)]
+struct Peer {
+    /// Robot id (key prefix `limb/<robot>/@v1`).
+    #[arg(long)]
+    robot: String,
+    /// Endpoints to connect to, e.g. tcp/127.0.0.1:7447.
+    #[arg(long)]
+    connect: Vec<String>,
+    /// Payload encoding.
+    #[arg(long, value_enum, default_value = "json")]
+    format: Format,
+}
+
+#[derive(Subcommand)]
+enum Action {
+    /// Run a node on the synthetic lift (starts in Validated) for a while.
+    Node {
+        #[command(flatten)]
+        peer: Peer,
+        /// Endpoints to listen on, e.g. tcp/127.0.0.1:7447.
+        #[arg(long)]
+        listen: Vec<String>,
+        /// File holding the shared command secret (at least 16 bytes).
+        #[arg(long)]
+        key_file: PathBuf,
+        /// Control rate [Hz].
+        #[arg(long, default_value_t = 100.0)]
+        rate: f64,
+        /// Run time [s].
+        #[arg(long, default_value_t = 60.0)]
+        seconds: f64,
+        /// What to do when the supervisor's heartbeat stops.
+        #[arg(long, value_enum, default_value = "stop")]
+        on_supervisor_loss: Policy,
+        /// Supervisor heartbeat timeout [s].
+        #[arg(long, default_value_t = 0.25)]
+        liveness_timeout: f64,
+    },
+    /// Send one signed command and print its ack.
+    Send {
+        #[command(flatten)]
+        peer: Peer,
+        /// File holding the shared command secret.
+        #[arg(long)]
+        key_file: PathBuf,
+        #[command(subcommand)]
+        command: CommandArg,
+    },
+    /// Send an emergency stop (unsigned) and print its ack.
+    Estop {
+        #[command(flatten)]
+        peer: Peer,
+    },
+    /// Query a node's state, configuration or arm model.
+    Query {
+        #[command(flatten)]
+        peer: Peer,
+        /// What to ask for.
+        #[arg(value_enum)]
+        what: QueryArg,
+    },
+}
+
+#[derive(Subcommand)]
+enum CommandArg {
+    /// Grasp → Estimate.
+    StartEstimation,
+    /// Validated → Manipulate to these joint angles [rad].
+    Approve {
+        shoulder_elevation: f64,
+        elbow_flexion: f64,
+    },
+    /// Manipulate → Validated.
+    Finish,
+    /// Any state → SafeStop (signed operator stop).
+    Stop,
+    /// SafeStop → Grasp.
+    Reset,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum QueryArg {
+    State,
+    Config,
+    Arm,
+}
+
+fn internal(error: AdapterError) -> CliError {
+    CliError::Internal(error.to_string())
+}
+
+fn bad_input(error: AdapterError) -> CliError {
+    CliError::BadInput(error.to_string())
+}
+
+fn read_key(path: &PathBuf) -> Result<CommandKey, CliError> {
+    let bytes =
+        std::fs::read(path).map_err(|e| CliError::BadInput(format!("{}: {e}", path.display())))?;
+    CommandKey::new(bytes.trim_ascii())
+        .map_err(|e| CliError::BadInput(format!("{}: {e}", path.display())))
+}
+
+fn supervisor(peer: &Peer, key: CommandKey) -> Result<Supervisor, CliError> {
+    let config = peer_config(&[], &peer.connect, LEASE_MS).map_err(bad_input)?;
+    let supervisor =
+        Supervisor::connect(config, &peer.robot, peer.format.into(), key).map_err(bad_input)?;
+    supervisor.wait_for_node(ANSWER_TIMEOUT).map_err(internal)?;
+    Ok(supervisor)
+}
+
+/// Runs `limb zenoh ...`.
+pub fn run(args: ZenohArgs) -> Result<(), CliError> {
+    match args.action {
+        Action::Node {
+            peer,
+            listen,
+            key_file,
+            rate,
+            seconds,
+            on_supervisor_loss,
+            liveness_timeout,
+        } => {
+            let period = positive_duration(1.0 / rate, "--rate")?;
+            let run_time = positive_duration(seconds, "--seconds")?;
+            let settings = LinkSettings {
+                robot_id: peer.robot,
+                format: peer.format.into(),
+                command_key: read_key(&key_file)?,
+                sample_decimation: 1,
+                status_period: 0.1,
+                liveness: LivenessPolicy {
+                    timeout: positive_duration(liveness_timeout, "--liveness-timeout")?,
+                    on_loss: match on_supervisor_loss {
+                        Policy::Stop => OnSupervisorLoss::Stop,
+                        Policy::Continue => OnSupervisorLoss::Continue,
+                    },
+                },
+            };
+            let config = peer_config(&listen, &peer.connect, LEASE_MS).map_err(bad_input)?;
+            let lift = ScriptedLift::reference();
+            let (kernel, origin) = lift.kernel_after_lift();
+            let node = Node::spawn(
+                config,
+                &settings,
+                LoopSettings { period, origin },
+                kernel,
+                Box::new(lift),
+            )
+            .map_err(bad_input)?;
+            std::thread::sleep(run_time);
+            let kernel = node.shutdown().map_err(internal)?;
+            print_json(&serde_json::json!({ "state": kernel.state().kind() }))
+        }
+        Action::Send {
+            peer,
+            key_file,
+            command,
+        } => {
+            let command = match command {
+                CommandArg::StartEstimation => SupervisorCommand::StartEstimation,
+                CommandArg::Approve {
+                    shoulder_elevation,
+                    elbow_flexion,
+                } => SupervisorCommand::ApproveManipulation {
+                    target: JointAngles {
+                        shoulder_elevation,
+                        elbow_flexion,
+                    },
+                },
+                CommandArg::Finish => SupervisorCommand::FinishManipulation,
+                CommandArg::Stop => SupervisorCommand::Stop,
+                CommandArg::Reset => SupervisorCommand::Reset,
+            };
+            let mut supervisor = supervisor(&peer, read_key(&key_file)?)?;
+            let ack = supervisor
+                .request(command, ANSWER_TIMEOUT)
+                .map_err(internal)?;
+            supervisor.close().map_err(internal)?;
+            print_json(&ack)
+        }
+        Action::Estop { peer } => {
+            let mut supervisor = supervisor(&peer, unsigned_key()?)?;
+            let sequence = supervisor.emergency_stop().map_err(internal)?;
+            let ack = supervisor
+                .wait_ack(|a| a.sequence == Some(sequence), ANSWER_TIMEOUT)
+                .map_err(internal)?;
+            supervisor.close().map_err(internal)?;
+            print_json(&ack)
+        }
+        Action::Query { peer, what } => {
+            let supervisor = supervisor(&peer, unsigned_key()?)?;
+            let keys = supervisor.keys();
+            let key = match what {
+                QueryArg::State => keys.state(),
+                QueryArg::Config => keys.config(),
+                QueryArg::Arm => keys.arm(),
+            };
+            let answer = supervisor.query::<serde_json::Value>(&key, ANSWER_TIMEOUT);
+            let answer = answer.map_err(internal)?;
+            supervisor.close().map_err(internal)?;
+            print_json(&answer)
+        }
+    }
+}
+
+/// A placeholder key for sessions that sign nothing (e-stops and queries
+/// are not signed).
+fn unsigned_key() -> Result<CommandKey, CliError> {
+    CommandKey::new(&[0; 16]).map_err(internal)
+}
+
+fn positive_duration(seconds: f64, flag: &str) -> Result<Duration, CliError> {
+    Duration::try_from_secs_f64(seconds)
+        .ok()
+        .filter(|d| !d.is_zero())
+        .ok_or_else(|| CliError::BadInput(format!("{flag} must be a positive number")))
+}
