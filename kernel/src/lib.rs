@@ -26,6 +26,14 @@
 
 #![no_std]
 #![forbid(unsafe_code)]
+// Panics are bugs (Tock's rule): no unwrap, expect or panic outside tests.
+// Indexing stays allowed: it is used only on fixed-size arrays and nalgebra
+// vectors with indices bounded by their length, and the panic-freedom
+// properties and harnesses (REQ-PANIC-001, REQ-EST-001) exercise it.
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
 
 pub mod arm;
 pub mod command;
