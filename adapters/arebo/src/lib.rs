@@ -29,5 +29,7 @@
 #![cfg_attr(not(feature = "std"), no_std)]
 #![forbid(unsafe_code)]
 
+pub mod calibration;
 pub mod encoder;
+pub mod human;
 pub mod kinematics;
