@@ -30,6 +30,8 @@
 #![forbid(unsafe_code)]
 
 pub mod calibration;
+pub mod control;
 pub mod encoder;
 pub mod human;
 pub mod kinematics;
+pub mod safety;
