@@ -223,7 +223,7 @@ impl Default for CalibrationLimits {
             min_plane_spread: 0.03,
             length: (0.10, 0.45),
             max_sphere_residual: 0.005,
-            min_sphere_spread: 0.002,
+            min_sphere_spread: 0.001,
             max_origin_distance: 1.2,
         }
     }

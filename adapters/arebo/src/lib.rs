@@ -35,3 +35,5 @@ pub mod encoder;
 pub mod human;
 pub mod kinematics;
 pub mod safety;
+#[cfg(feature = "std")]
+pub mod sim;
