@@ -34,6 +34,7 @@ pub mod control;
 pub mod encoder;
 pub mod human;
 pub mod kinematics;
+pub mod protocol;
 pub mod safety;
 #[cfg(feature = "std")]
 pub mod sim;
