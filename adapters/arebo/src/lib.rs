@@ -34,6 +34,8 @@ pub mod control;
 pub mod encoder;
 pub mod human;
 pub mod kinematics;
+#[cfg(feature = "std")]
+pub mod link;
 pub mod protocol;
 pub mod safety;
 #[cfg(feature = "std")]

@@ -314,25 +314,51 @@ fn record(setup: Setup, trajectory: Trajectory, duration: f64) -> PathBuffer {
 /// # Errors
 /// [`CalibrationFailure`] when a fit fails or the validator rejects it.
 pub fn calibrate(setup: Setup, seed: u64) -> Result<ValidatedArmModel, CalibrationFailure> {
-    let quarter = core::f64::consts::FRAC_PI_4;
-    let w = 2.0 * core::f64::consts::PI * 0.2;
-    let flexion = move |t: f64| {
-        (
-            ShoulderAngles {
-                flexion: quarter * (1.0 - libm::cos(w * t)),
-                abduction: 0.0,
-            },
-            [quarter * w * libm::sin(w * t), 0.0],
-        )
-    };
-    let plane =
-        calibration::fit_plane(&record(setup, &flexion, 15.0)).map_err(CalibrationFailure::Fit)?;
-    let mut rng = SplitMix64::new(seed);
-    let small = Polysine::new([quarter, 0.0], [5f64.to_radians(); 2], &mut rng);
-    let sphere = calibration::fit_sphere(&record(setup, &|t| small.at(t), 15.0))
+    let plane = calibration::fit_plane(&record(setup, &flexion_calibration, CALIBRATION_PHASE))
+        .map_err(CalibrationFailure::Fit)?;
+    let small = sphere_calibration(seed);
+    let sphere = calibration::fit_sphere(&record(setup, &|t| small.at(t), CALIBRATION_PHASE))
         .map_err(CalibrationFailure::Fit)?;
     calibration::validate(&plane, &sphere, &CalibrationLimits::default())
         .map_err(CalibrationFailure::Rejected)
+}
+
+/// Length of each calibration phase [s].
+pub const CALIBRATION_PHASE: f64 = 15.0;
+
+/// Calibration phase 1: three flexion movements 0-90° in 15 s, φ2 = 0.
+pub fn flexion_calibration(t: f64) -> (ShoulderAngles, [f64; 2]) {
+    let quarter = core::f64::consts::FRAC_PI_4;
+    let w = 2.0 * core::f64::consts::PI * 0.2;
+    (
+        ShoulderAngles {
+            flexion: quarter * (1.0 - libm::cos(w * t)),
+            abduction: 0.0,
+        },
+        [quarter * w * libm::sin(w * t), 0.0],
+    )
+}
+
+/// Calibration phase 2: small random movements, a polysine of ±20° about
+/// φ = (45°, 0).
+pub fn sphere_calibration(seed: u64) -> Polysine {
+    let mut rng = SplitMix64::new(seed);
+    Polysine::new(
+        [core::f64::consts::FRAC_PI_4, 0.0],
+        [5f64.to_radians(); 2],
+        &mut rng,
+    )
+}
+
+/// The joint-angle accuracy motion (paper 2.4.3): flexion 0-90°,
+/// abduction ±30°.
+pub fn accuracy_motion(seed: u64) -> Polysine {
+    let mut rng = SplitMix64::new(seed);
+    Polysine::new(
+        [45f64.to_radians(), 0.0],
+        [11.25f64.to_radians(), 7.5f64.to_radians()],
+        &mut rng,
+    )
 }
 
 /// Median absolute errors of the estimated shoulder angles [rad].
