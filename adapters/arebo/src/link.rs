@@ -256,8 +256,9 @@ pub struct DeviceRecord {
 /// A trajectory the device's SJM follows (simulated time [s]).
 pub type DeviceTrajectory = Box<dyn Fn(f64) -> (ShoulderAngles, [f64; 2]) + Send>;
 
-/// Runs the simulated AREBO on `device` for `frames` frames of 5 ms
-/// simulated time, one every `wall_period` of real time.
+/// Runs the simulated AREBO on `device` for `frames` periods of
+/// `wall_period` real time; each streamed frame advances the simulation by
+/// 5 ms.
 pub fn spawn_device(
     device: File,
     setup: Setup,
@@ -300,7 +301,10 @@ pub fn spawn_device(
         let mut last_heartbeat = start;
         let mut counts = [0i32; 5];
         let mut garbage = sim::SplitMix64::new(7);
-        for n in 0..frames {
+        // Simulated time runs while the device streams, so the motion
+        // starts when a host starts the stream.
+        let mut simulated = 0usize;
+        for _ in 0..frames {
             while let Ok(command) = received.try_recv() {
                 match command {
                     Command::StartStream => streaming = true,
@@ -327,9 +331,12 @@ pub fn spawn_device(
             } else {
                 nalgebra::Vector3::zeros()
             };
-            for k in 0..5 {
-                let t = (n * 5 + k) as f64 * sim::PHYSICS_STEP;
-                sjm.step(trajectory(t), &force);
+            if streaming {
+                for k in 0..5 {
+                    let t = (simulated * 5 + k) as f64 * sim::PHYSICS_STEP;
+                    sjm.step(trajectory(t), &force);
+                }
+                simulated += 1;
             }
             if let Some(c) = sensor.read(&sjm.endpoint()) {
                 counts = c;
