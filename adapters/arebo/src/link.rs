@@ -256,8 +256,9 @@ pub struct DeviceRecord {
 /// A trajectory the device's SJM follows (simulated time [s]).
 pub type DeviceTrajectory = Box<dyn Fn(f64) -> (ShoulderAngles, [f64; 2]) + Send>;
 
-/// Runs the simulated AREBO on `device` for `frames` periods of
-/// `wall_period` real time; each streamed frame advances the simulation by
+/// Runs the simulated AREBO on `device` until it has streamed `frames`
+/// frames (or spent 2 × `frames` periods), one period of `wall_period`
+/// real time per frame; each streamed frame advances the simulation by
 /// 5 ms.
 pub fn spawn_device(
     device: File,
@@ -304,7 +305,12 @@ pub fn spawn_device(
         // Simulated time runs while the device streams, so the motion
         // starts when a host starts the stream.
         let mut simulated = 0usize;
-        for _ in 0..frames {
+        // Idle (not streaming) periods count too, so a device nobody
+        // starts still ends.
+        for _ in 0..frames.saturating_mul(2) {
+            if record.frames >= frames {
+                break;
+            }
             while let Ok(command) = received.try_recv() {
                 match command {
                     Command::StartStream => streaming = true,
