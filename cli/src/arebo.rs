@@ -13,10 +13,11 @@
 use crate::error::{print_json, CliError};
 use clap::Subcommand;
 use limb_arebo::calibration::{self, CalibrationLimits};
+use limb_arebo::encoder::{BacklashCompensator, NOMINAL_BACKLASH};
 use limb_arebo::link::{self, FaultSwitch, Session, SessionState};
 use limb_arebo::protocol::{Command, ControlType, Telemetry};
 use limb_arebo::safety::SafetyLimits;
-use limb_arebo::{kinematics, sim};
+use limb_arebo::sim;
 use serde_json::json;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -148,17 +149,20 @@ fn calibrate(device: &Path) -> Result<(), CliError> {
     let mut session = open(device)?;
     let per_phase = (sim::CALIBRATION_PHASE / sim::SAMPLE_PERIOD) as usize;
     let frames = collect(&mut session, 2 * per_phase)?;
-    let endpoints: Vec<_> = frames
-        .iter()
-        .map(|f| kinematics::endpoint(sim::actuated_angles(&f.counts)))
-        .collect();
+    let mut compensator = BacklashCompensator::new(NOMINAL_BACKLASH);
+    // Keep the samples outside the joints' play (see BacklashCompensator).
+    let mut phases = [Vec::new(), Vec::new()];
+    for (n, frame) in frames.iter().enumerate() {
+        let endpoint = sim::endpoint_estimate(&mut compensator, &frame.counts);
+        if compensator.settled() {
+            phases[usize::from(n >= per_phase)].push(endpoint);
+        }
+    }
     let rejected = |what: &str, e: &dyn std::fmt::Debug| {
         CliError::BadInput(format!("{}: {what}: {e:?}", device.display()))
     };
-    let plane = calibration::fit_plane(&endpoints[..per_phase])
-        .map_err(|e| rejected("flexion plane", &e))?;
-    let sphere =
-        calibration::fit_sphere(&endpoints[per_phase..]).map_err(|e| rejected("sphere", &e))?;
+    let plane = calibration::fit_plane(&phases[0]).map_err(|e| rejected("flexion plane", &e))?;
+    let sphere = calibration::fit_sphere(&phases[1]).map_err(|e| rejected("sphere", &e))?;
     let model = calibration::validate(&plane, &sphere, &CalibrationLimits::default())
         .map_err(|e| rejected("validation", &e))?;
     print_json(&json!({

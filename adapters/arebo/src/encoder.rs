@@ -66,6 +66,75 @@ impl Encoder {
     }
 }
 
+/// Gearbox backlash of θ1..θ3 [rad] (paper 2.2.2: about 1°).
+pub const NOMINAL_BACKLASH: [f64; 3] = [
+    core::f64::consts::PI / 180.0,
+    core::f64::consts::PI / 180.0,
+    core::f64::consts::PI / 180.0,
+];
+
+/// Inverse of a dead-band backlash between link and motor-side encoder.
+///
+/// A link moving in + drags the motor side half the play behind it, so
+/// link ≈ motor + play/2 · (direction of the last motor movement). After a
+/// reversal the motor side stands still until the link has crossed the
+/// play, and the estimate is off by up to the play until it moves again;
+/// everywhere else the play is removed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BacklashCompensator {
+    play: [f64; 3],
+    last: Option<[f64; 3]>,
+    direction: [f64; 3],
+    moved: [bool; 3],
+}
+
+impl BacklashCompensator {
+    /// A compensator for `play` [rad] on θ1..θ3 (zero: pass-through).
+    pub const fn new(play: [f64; 3]) -> Self {
+        Self {
+            play,
+            last: None,
+            direction: [0.0; 3],
+            moved: [false; 3],
+        }
+    }
+
+    /// Link angles [rad] from the motor-side angles [rad] of this sample.
+    pub fn link_angles(&mut self, motor: [f64; 3]) -> [f64; 3] {
+        if let Some(last) = self.last {
+            for (((direction, moved), now), before) in self
+                .direction
+                .iter_mut()
+                .zip(self.moved.iter_mut())
+                .zip(motor)
+                .zip(last)
+            {
+                *moved = now != before;
+                if now > before {
+                    *direction = 1.0;
+                } else if now < before {
+                    *direction = -1.0;
+                }
+            }
+        }
+        self.last = Some(motor);
+        let mut link = motor;
+        for ((angle, play), direction) in link.iter_mut().zip(self.play).zip(self.direction) {
+            *angle += 0.5 * play * direction;
+        }
+        link
+    }
+
+    /// True when every joint with play moved in the last sample: its play
+    /// is closed and the estimate exact (calibration keeps only these).
+    pub fn settled(&self) -> bool {
+        self.moved
+            .iter()
+            .zip(self.play)
+            .all(|(moved, play)| *moved || play == 0.0)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -79,6 +148,17 @@ mod tests {
             let error = libm::fabs(encoder.quantise(angle) - angle);
             prop_assert!(error <= 0.5 * encoder.resolution() + 1e-15);
         }
+    }
+
+    #[test]
+    fn compensation_removes_the_play_while_moving() {
+        let mut compensator = BacklashCompensator::new([0.02; 3]);
+        // Link moving +: the motor side trails by 0.01.
+        compensator.link_angles([0.0; 3]);
+        let link = compensator.link_angles([0.05; 3]);
+        assert!((link[0] - 0.06).abs() < 1e-12);
+        let link = compensator.link_angles([0.04; 3]);
+        assert!((link[1] - 0.03).abs() < 1e-12);
     }
 
     #[test]

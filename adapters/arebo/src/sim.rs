@@ -21,7 +21,7 @@ use crate::calibration::{
     self, CalibrationLimits, FitError, PathBuffer, Rejection, ValidatedArmModel,
 };
 use crate::control::{self, AdaptiveDeweighting};
-use crate::encoder::Encoder;
+use crate::encoder::{BacklashCompensator, Encoder};
 use crate::human::{self, ArmMass, ShoulderAngles};
 use crate::kinematics::{self, ActuatedAngles, ElbowBranch, ShoulderBranch};
 use nalgebra::Vector3;
@@ -206,9 +206,18 @@ impl RobotSensor {
     }
 }
 
-/// θ1..θ3 [rad] from encoder counts θ1..θ5.
+/// θ1..θ3 [rad] from encoder counts θ1..θ5 (motor side, no backlash
+/// correction).
 pub fn actuated_angles(counts: &[i32; 5]) -> ActuatedAngles {
     ActuatedAngles([0, 1, 2].map(|i| Encoder::Actuated(i).angle(counts[i])))
+}
+
+/// The adapter's endpoint estimate [m, frame R0]: counts → angles →
+/// backlash compensation → forward kinematics.
+pub fn endpoint_estimate(compensator: &mut BacklashCompensator, counts: &[i32; 5]) -> Vector3<f64> {
+    kinematics::endpoint(ActuatedAngles(
+        compensator.link_angles(actuated_angles(counts).0),
+    ))
 }
 
 /// A trajectory generator: angles and rates at time t [s].
@@ -298,10 +307,15 @@ pub enum CalibrationFailure {
 
 fn record(setup: Setup, trajectory: Trajectory, duration: f64) -> PathBuffer {
     let mut path = PathBuffer::new();
+    let mut compensator = BacklashCompensator::new(setup.backlash);
     run_unassisted(setup, trajectory, duration, |_, counts| {
         if let Some(counts) = counts {
-            // Capacity 3000 = 15 s at 200 Hz; longer runs keep the first 15 s.
-            let _ = path.push(kinematics::endpoint(actuated_angles(&counts)));
+            // Capacity 3000 = 15 s at 200 Hz; longer runs keep the first
+            // 15 s. Samples inside a joint's play are left out.
+            let endpoint = endpoint_estimate(&mut compensator, &counts);
+            if compensator.settled() {
+                let _ = path.push(endpoint);
+            }
         }
     });
     path
@@ -391,12 +405,10 @@ pub fn polysine_experiment(
         &mut rng,
     );
     let (mut flexion, mut abduction) = (Vec::new(), Vec::new());
+    let mut compensator = BacklashCompensator::new(setup.backlash);
     run_unassisted(setup, &|t| motion.at(t), duration, |truth, counts| {
-        let estimate = counts.and_then(|c| {
-            model
-                .angles(&kinematics::endpoint(actuated_angles(&c)))
-                .ok()
-        });
+        let estimate =
+            counts.and_then(|c| model.angles(&endpoint_estimate(&mut compensator, &c)).ok());
         if let Some(estimate) = estimate {
             flexion.push((estimate.flexion - truth.flexion).abs());
             abduction.push((estimate.abduction - truth.abduction).abs());
@@ -460,6 +472,7 @@ pub fn weight_support_experiment(
     };
     let mut sjm = ShoulderJointModel::new(setup, start);
     let mut sensor = RobotSensor::new(setup.backlash);
+    let mut compensator = BacklashCompensator::new(setup.backlash);
     let mut adaptive = AdaptiveDeweighting::new(0.3);
     let mut force = Vector3::zeros();
     let mut records = Vec::with_capacity(trials);
@@ -472,11 +485,9 @@ pub fn weight_support_experiment(
         let alpha = adaptive.alpha();
         let samples = (5.0 / SAMPLE_PERIOD) as usize;
         for n in 0..samples {
-            let estimate = sensor.read(&sjm.endpoint()).and_then(|c| {
-                model
-                    .angles(&kinematics::endpoint(actuated_angles(&c)))
-                    .ok()
-            });
+            let estimate = sensor
+                .read(&sjm.endpoint())
+                .and_then(|c| model.angles(&endpoint_estimate(&mut compensator, &c)).ok());
             // The robot holds its last force if a sample cannot be read.
             if let Some(phi) = estimate {
                 force = control::support_force(alpha, phi, model, setup.arm).unwrap_or(force);
