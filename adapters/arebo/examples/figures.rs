@@ -75,19 +75,33 @@ fn svg(trials: &[Trial]) -> String {
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let setup = Setup::default();
+    let raw = Setup {
+        compensated_backlash: [0.0; 3],
+        ..setup
+    };
+    let clean = Setup {
+        backlash: [0.0; 3],
+        compensated_backlash: [0.0; 3],
+        ..setup
+    };
+    for (name, variant) in [
+        ("no backlash", clean),
+        ("1 deg backlash, raw", raw),
+        ("1 deg backlash, compensated", setup),
+    ] {
+        let model = sim::calibrate(variant, 1).map_err(|e| format!("calibration failed: {e:?}"))?;
+        let errors = sim::polysine_experiment(variant, &model, 120.0, 2);
+        println!(
+            "{name}: psi_x error {:.3} deg, origin error {:.3} mm, length error {:.3} mm; \
+             polysine 120 s median |error| flexion {:.3} deg (paper 2.10), abduction {:.3} deg (paper 1.30)",
+            (model.psi_x() - variant.psi_x).to_degrees(),
+            (model.origin() - variant.origin).norm() * 1e3,
+            (model.length() - variant.length) * 1e3,
+            errors.flexion.to_degrees(),
+            errors.abduction.to_degrees()
+        );
+    }
     let model = sim::calibrate(setup, 1).map_err(|e| format!("calibration failed: {e:?}"))?;
-    println!(
-        "calibration: psi_x error {:.3} deg, origin error {:.2} mm, length error {:.2} mm",
-        (model.psi_x() - setup.psi_x).to_degrees(),
-        (model.origin() - setup.origin).norm() * 1e3,
-        (model.length() - setup.length) * 1e3
-    );
-    let errors = sim::polysine_experiment(setup, &model, 120.0, 2);
-    println!(
-        "polysine 120 s: median |error| flexion {:.2} deg (paper 2.10), abduction {:.2} deg (paper 1.30)",
-        errors.flexion.to_degrees(),
-        errors.abduction.to_degrees()
-    );
     let trials = sim::weight_support_experiment(setup, &model, 300, 3);
     let folder = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut csv = String::from("trial,impairment,alpha,success\n");

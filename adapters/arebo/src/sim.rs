@@ -69,9 +69,13 @@ pub struct Setup {
     pub stiffness: f64,
     /// SJM PD damping [N m s/rad].
     pub damping: f64,
-    /// Saturation of each SJM motor [N m], applied before the (1 − ξ)
-    /// scaling: the impaired arm's strength is (1 − ξ) of it.
-    pub torque_limit: f64,
+    /// Strength of each SJM motor as a multiple of the torque that holds
+    /// the arm at the target pose; its output saturates there (plus
+    /// [`Setup::strength_floor`]) before the (1 − ξ) scaling, so the
+    /// impaired arm lifts (1 − ξ) of that.
+    pub strength: f64,
+    /// Strength added to every pose [N m] (lets the PD work near φ = 0).
+    pub strength_floor: f64,
     /// True ψx [rad].
     pub psi_x: f64,
     /// True shoulder centre, frame R0 [m].
@@ -81,17 +85,23 @@ pub struct Setup {
     /// Gearbox backlash on θ1..θ3 [rad] (paper 2.2.2: about 1°), modelled
     /// as a dead-band between link and motor-side encoder.
     pub backlash: [f64; 3],
+    /// The play the adapter's [`BacklashCompensator`] removes [rad]
+    /// (zero: raw motor-side angles).
+    pub compensated_backlash: [f64; 3],
 }
 
 impl Default for Setup {
     /// 2 kg arm, centre of mass 0.15 m, l = 0.175 m (paper Table 1),
-    /// shoulder at (0.10, −0.10, 0.30) m, ψx = 10°; SJM PD 8 N m/rad,
-    /// 1.39 N m s/rad (critically damped), motors saturating at 2.6 N m
-    /// (just above the 2.55 N m a 60° flexion needs), so the healthy arm
-    /// reaches every target and the impaired one, (1 − ξ)·2.6 N m, needs
-    /// support. Stiffer PDs make over-support (α > ξ after ξ drops) fail
-    /// trials, and the paper's rule then raises α without bound. Backlash 1° on every actuated joint (worst case: a
-    /// dead-band also on the gravity-loaded θ2, θ3).
+    /// shoulder at (0.10, −0.10, 0.30) m, ψx = 10°; SJM PD 20 N m/rad,
+    /// 2.19 N m s/rad (critically damped) with gravity feed-forward; each
+    /// motor saturates at the torque that holds the arm at the target
+    /// (strength 1.0) + 0.05 N m, then is scaled by (1 − ξ): the impaired
+    /// arm lifts (1 − ξ) of its weight at any pose, so it needs support
+    /// α ≳ ξ. (A fixed saturation makes the needed α depend on the target's
+    /// gravity torque; an unsaturated scaled PD never fails when
+    /// under-supported.) The PD is stiff enough that over-support after ξ
+    /// drops stays within 5°. Backlash 1° on every actuated joint (a
+    /// dead-band, also on the gravity-loaded θ2, θ3).
     fn default() -> Self {
         Self {
             arm: ArmMass {
@@ -99,13 +109,15 @@ impl Default for Setup {
                 centre_of_mass: 0.15,
             },
             inertia: 0.06,
-            stiffness: 8.0,
-            damping: 1.39,
-            torque_limit: 2.6,
+            stiffness: 20.0,
+            damping: 2.19,
+            strength: 1.0,
+            strength_floor: 0.05,
             psi_x: 10f64.to_radians(),
             origin: Vector3::new(0.10, -0.10, 0.30),
             length: 0.175,
             backlash: [1f64.to_radians(); 3],
+            compensated_backlash: [1f64.to_radians(); 3],
         }
     }
 }
@@ -153,6 +165,7 @@ impl ShoulderJointModel {
         let s = self.setup;
         let phi = self.angles();
         let holding = human::gravity_torques(phi, s.psi_x, s.arm);
+        let target_holding = human::gravity_torques(target.0, s.psi_x, s.arm);
         let force_h0 = human::base_rotation(s.psi_x).inverse() * cuff_force;
         let external = human::jacobian(phi, s.length).transpose() * force_h0;
         let desired = [target.0.flexion, target.0.abduction];
@@ -160,7 +173,8 @@ impl ShoulderJointModel {
             let command = s.stiffness * (desired[j] - self.phi[j])
                 + s.damping * (target.1[j] - self.rate[j])
                 + holding[j];
-            let motor = (1.0 - self.impairment) * command.clamp(-s.torque_limit, s.torque_limit);
+            let limit = s.strength * target_holding[j].abs() + s.strength_floor;
+            let motor = (1.0 - self.impairment) * command.clamp(-limit, limit);
             let acceleration = (motor - holding[j] + external[j]) / s.inertia;
             self.rate[j] += acceleration * PHYSICS_STEP;
         }
@@ -307,7 +321,7 @@ pub enum CalibrationFailure {
 
 fn record(setup: Setup, trajectory: Trajectory, duration: f64) -> PathBuffer {
     let mut path = PathBuffer::new();
-    let mut compensator = BacklashCompensator::new(setup.backlash);
+    let mut compensator = BacklashCompensator::new(setup.compensated_backlash);
     run_unassisted(setup, trajectory, duration, |_, counts| {
         if let Some(counts) = counts {
             // Capacity 3000 = 15 s at 200 Hz; longer runs keep the first
@@ -405,7 +419,7 @@ pub fn polysine_experiment(
         &mut rng,
     );
     let (mut flexion, mut abduction) = (Vec::new(), Vec::new());
-    let mut compensator = BacklashCompensator::new(setup.backlash);
+    let mut compensator = BacklashCompensator::new(setup.compensated_backlash);
     run_unassisted(setup, &|t| motion.at(t), duration, |truth, counts| {
         let estimate =
             counts.and_then(|c| model.angles(&endpoint_estimate(&mut compensator, &c)).ok());
@@ -472,7 +486,7 @@ pub fn weight_support_experiment(
     };
     let mut sjm = ShoulderJointModel::new(setup, start);
     let mut sensor = RobotSensor::new(setup.backlash);
-    let mut compensator = BacklashCompensator::new(setup.backlash);
+    let mut compensator = BacklashCompensator::new(setup.compensated_backlash);
     let mut adaptive = AdaptiveDeweighting::new(0.3);
     let mut force = Vector3::zeros();
     let mut records = Vec::with_capacity(trials);

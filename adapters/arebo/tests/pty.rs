@@ -46,7 +46,7 @@ fn calibrate_over_pty(setup: Setup) -> (f64, f64, f64, f64, f64) {
     }
     let record = device.join().unwrap();
     assert_eq!(frames.len(), record.frames, "every streamed frame decoded");
-    let mut compensator = BacklashCompensator::new(setup.backlash);
+    let mut compensator = BacklashCompensator::new(setup.compensated_backlash);
     let estimates: Vec<_> = frames
         .iter()
         .map(|f| {
@@ -97,6 +97,7 @@ fn calibrate_over_pty(setup: Setup) -> (f64, f64, f64, f64, f64) {
 fn calibration_and_tracking_over_the_pty() {
     let clean = calibrate_over_pty(Setup {
         backlash: [0.0; 3],
+        compensated_backlash: [0.0; 3],
         ..Setup::default()
     });
     println!("no backlash: {clean:?}");
