@@ -16,6 +16,7 @@
 //!                    human (φ1, φ2, J_h, τ_h) ─▶ control (τ_g, torque PD,
 //!                                   unassisted / weight support, adaptive α)
 //!                                   │           safety (typed verdicts)
+//!                    supervisor (one frame → τ_d or a latched safe stop)
 //!                    protocol (framing, streaming decoder)
 //! ```
 //!
@@ -40,3 +41,4 @@ pub mod protocol;
 pub mod safety;
 #[cfg(feature = "std")]
 pub mod sim;
+pub mod supervisor;
