@@ -162,3 +162,58 @@ fn faults_over_the_pty() {
         device.join().unwrap();
     }
 }
+
+/// Without heartbeats the device flags the missing heartbeat (error bit 0)
+/// after about 1 s (it then also stops applying the torque target; that
+/// part is not asserted here).
+#[test]
+fn device_flags_a_missing_heartbeat() {
+    use limb_arebo::protocol::{Command, ControlType, Decoder, ERROR_HEARTBEAT, TELEMETRY_HEADER};
+    use std::io::{Read, Write};
+    let pty = link::pseudo_terminal().unwrap();
+    let motion = sim::accuracy_motion(4);
+    let device = link::spawn_device(
+        pty.device.try_clone().unwrap(),
+        Setup::default(),
+        Box::new(move |t| motion.at(t)),
+        400,
+        Duration::from_millis(5),
+        FaultSwitch::default(),
+    )
+    .unwrap();
+    // A bare host: starts the stream, asks for torque control, never beats.
+    let mut port = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .open(&pty.path)
+        .unwrap();
+    port.write_all(&Command::Heartbeat.encode()).unwrap();
+    port.write_all(&Command::SetControlType(ControlType::Torque).encode())
+        .unwrap();
+    port.write_all(&Command::StartStream.encode()).unwrap();
+    let mut decoder = Decoder::new(TELEMETRY_HEADER);
+    let mut frames: Vec<(Instant, Telemetry)> = Vec::new();
+    let start = Instant::now();
+    let mut bytes = [0u8; 512];
+    while start.elapsed() < Duration::from_millis(1600) {
+        let n = port.read(&mut bytes).unwrap_or(0);
+        for b in bytes.iter().take(n) {
+            if let Some(t) = decoder.push(*b).and_then(|p| Telemetry::parse(&p)) {
+                frames.push((Instant::now(), t));
+            }
+        }
+    }
+    let early: Vec<_> = frames
+        .iter()
+        .filter(|(t, _)| t.duration_since(start) < Duration::from_millis(700))
+        .collect();
+    let late: Vec<_> = frames
+        .iter()
+        .filter(|(t, _)| t.duration_since(start) > Duration::from_millis(1300))
+        .collect();
+    assert!(!early.is_empty() && !late.is_empty());
+    assert!(early.iter().all(|(_, f)| f.error & ERROR_HEARTBEAT == 0));
+    assert!(late.iter().all(|(_, f)| f.error & ERROR_HEARTBEAT != 0));
+    drop(port);
+    device.join().unwrap();
+}
