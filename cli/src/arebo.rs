@@ -7,17 +7,22 @@
 //! * `limb arebo calibrate --device PATH`: records 15 s of flexion/extension
 //!   and 15 s of small random movements, fits and validates the arm model;
 //!   JSON.
-//! * `limb arebo run --device PATH [--seconds S]`: streams in gravity
-//!   compensation with the stale-data safe stop; JSON summary.
+//! * `limb arebo run --device PATH [--seconds S] [--alpha A]`: calibrates,
+//!   then runs the supervisor (unassisted, or weight support with α = A),
+//!   sending the torque target each frame; stale data or a limit stops it;
+//!   JSON summary.
 
 use crate::error::{print_json, CliError};
 use clap::Subcommand;
-use limb_arebo::calibration::{self, CalibrationLimits};
+use limb_arebo::calibration::{self, CalibrationLimits, PlaneFit, SphereFit, ValidatedArmModel};
+use limb_arebo::control::{GravityParameters, Mode};
 use limb_arebo::encoder::{BacklashCompensator, NOMINAL_BACKLASH};
+use limb_arebo::human::ArmMass;
 use limb_arebo::link::{self, FaultSwitch, Session, SessionState};
 use limb_arebo::protocol::{Command, ControlType, Telemetry};
 use limb_arebo::safety::SafetyLimits;
 use limb_arebo::sim;
+use limb_arebo::supervisor::{Output, Sample, Supervisor};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -43,14 +48,17 @@ pub enum AreboCommand {
         #[arg(long)]
         device: PathBuf,
     },
-    /// Stream from a device in gravity compensation.
+    /// Calibrate, then run the supervisor (unassisted or weight support).
     Run {
         /// Serial device path.
         #[arg(long)]
         device: PathBuf,
-        /// How long to run [s].
+        /// How long to run after calibration [s].
         #[arg(long, default_value_t = 10.0)]
         seconds: f64,
+        /// De-weighting α (0: unassisted mode).
+        #[arg(long, default_value_t = 0.0)]
+        alpha: f64,
     },
 }
 
@@ -60,7 +68,11 @@ pub fn run(command: AreboCommand) -> Result<(), CliError> {
         AreboCommand::Sim { seed } => simulate(seed),
         AreboCommand::Serve { seconds } => serve(seconds),
         AreboCommand::Calibrate { device } => calibrate(&device),
-        AreboCommand::Run { device, seconds } => stream(&device, seconds),
+        AreboCommand::Run {
+            device,
+            seconds,
+            alpha,
+        } => stream(&device, seconds, alpha),
     }
 }
 
@@ -145,10 +157,13 @@ fn collect(session: &mut Session, count: usize) -> Result<Vec<Telemetry>, CliErr
     Ok(frames)
 }
 
-fn calibrate(device: &Path) -> Result<(), CliError> {
-    let mut session = open(device)?;
+/// Records the two calibration phases on `session` and validates the fits.
+fn calibrate_session(
+    session: &mut Session,
+    device: &Path,
+) -> Result<(ValidatedArmModel, PlaneFit, SphereFit), CliError> {
     let per_phase = (sim::CALIBRATION_PHASE / sim::SAMPLE_PERIOD) as usize;
-    let frames = collect(&mut session, 2 * per_phase)?;
+    let frames = collect(session, 2 * per_phase)?;
     let mut compensator = BacklashCompensator::new(NOMINAL_BACKLASH);
     // Keep the samples outside the joints' play (see BacklashCompensator).
     let mut phases = [Vec::new(), Vec::new()];
@@ -165,36 +180,94 @@ fn calibrate(device: &Path) -> Result<(), CliError> {
     let sphere = calibration::fit_sphere(&phases[1]).map_err(|e| rejected("sphere", &e))?;
     let model = calibration::validate(&plane, &sphere, &CalibrationLimits::default())
         .map_err(|e| rejected("validation", &e))?;
-    print_json(&json!({
+    Ok((model, plane, sphere))
+}
+
+fn model_json(model: &ValidatedArmModel) -> serde_json::Value {
+    json!({
         "psi_x_deg": model.psi_x().to_degrees(),
         "origin_m": [model.origin().x, model.origin().y, model.origin().z],
         "length_m": model.length(),
+    })
+}
+
+fn calibrate(device: &Path) -> Result<(), CliError> {
+    let mut session = open(device)?;
+    let (model, plane, sphere) = calibrate_session(&mut session, device)?;
+    print_json(&json!({
+        "model": model_json(&model),
         "plane_residual_m": plane.residual,
         "sphere_residual_m": sphere.residual,
     }))
 }
 
-fn stream(device: &Path, seconds: f64) -> Result<(), CliError> {
+fn stream(device: &Path, seconds: f64, alpha: f64) -> Result<(), CliError> {
     if !(seconds.is_finite() && seconds > 0.0) {
         return Err(CliError::BadInput(format!(
             "--seconds must be positive, got {seconds}"
         )));
     }
+    if !(0.0..=1.0).contains(&alpha) {
+        return Err(CliError::BadInput(format!(
+            "--alpha must be in [0, 1], got {alpha}"
+        )));
+    }
     let mut session = open(device)?;
+    let (model, _, _) = calibrate_session(&mut session, device)?;
+    let arm = ArmMass {
+        mass: 2.0,
+        centre_of_mass: 0.15,
+    };
+    let mut supervisor = Supervisor::new(
+        model,
+        arm,
+        GravityParameters::ASSUMED,
+        SafetyLimits::default(),
+        NOMINAL_BACKLASH,
+    );
+    let mode = if alpha > 0.0 {
+        Mode::WeightSupport { alpha }
+    } else {
+        Mode::Unassisted
+    };
+    let internal = |e: link::LinkError| CliError::Internal(e.to_string());
     session
-        .send(Command::SetControlType(ControlType::GravityCompensation))
-        .map_err(|e| CliError::Internal(e.to_string()))?;
+        .send(Command::SetControlType(ControlType::Torque))
+        .map_err(internal)?;
     let end = Instant::now() + Duration::from_secs_f64(seconds);
-    let mut frames = 0usize;
-    while Instant::now() < end && session.state() == SessionState::Running {
-        frames += session.poll().len();
+    let (mut frames, mut last_angles, mut stop) = (0usize, None, None);
+    while Instant::now() < end && session.state() == SessionState::Running && stop.is_none() {
+        for frame in session.poll() {
+            frames += 1;
+            let sample = Sample {
+                counts: frame.counts,
+                torques: nalgebra::Vector3::from(frame.torques.map(f64::from)),
+                time: session.now(),
+            };
+            match supervisor.step(Some(&sample), session.now(), mode) {
+                Output::Target { desired, angles } => {
+                    last_angles = Some(angles);
+                    let target = [desired.x as f32, desired.y as f32, desired.z as f32];
+                    session
+                        .send(Command::SetControlTarget(target))
+                        .map_err(internal)?;
+                }
+                Output::SafeStop(violation) => {
+                    stop = Some(violation);
+                    break;
+                }
+            }
+        }
     }
     let _ = session.send(Command::SetControlType(ControlType::Off));
     let stats = session.stats();
     print_json(&json!({
+        "model": model_json(&model),
         "frames": frames,
         "checksum_errors": stats.checksum_errors,
         "discarded_bytes": stats.discarded,
-        "state": format!("{:?}", session.state()),
+        "link_state": format!("{:?}", session.state()),
+        "supervisor_stop": stop.map(|v| format!("{v:?}")),
+        "last_angles_deg": last_angles.map(|a| [a.flexion.to_degrees(), a.abduction.to_degrees()]),
     }))
 }

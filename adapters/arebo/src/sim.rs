@@ -70,7 +70,8 @@ pub struct Setup {
     /// SJM PD damping [N m s/rad].
     pub damping: f64,
     /// Strength of each SJM motor as a multiple of the torque that holds
-    /// the arm at the target pose; its output saturates there (plus
+    /// the arm at the target or the current pose, whichever is larger; its
+    /// output saturates there (plus
     /// [`Setup::strength_floor`]) before the (1 − ξ) scaling, so the
     /// impaired arm lifts (1 − ξ) of that.
     pub strength: f64,
@@ -94,8 +95,9 @@ impl Default for Setup {
     /// 2 kg arm, centre of mass 0.15 m, l = 0.175 m (paper Table 1),
     /// shoulder at (0.10, −0.10, 0.30) m, ψx = 10°; SJM PD 20 N m/rad,
     /// 2.19 N m s/rad (critically damped) with gravity feed-forward; each
-    /// motor saturates at the torque that holds the arm at the target
-    /// (strength 1.0) + 0.05 N m, then is scaled by (1 − ξ): the impaired
+    /// motor saturates at the torque that holds the arm at the target (or
+    /// the current pose, if larger; strength 1.0) + 0.05 N m, then is
+    /// scaled by (1 − ξ): the impaired
     /// arm lifts (1 − ξ) of its weight at any pose, so it needs support
     /// α ≳ ξ. (A fixed saturation makes the needed α depend on the target's
     /// gravity torque; an unsaturated scaled PD never fails when
@@ -173,7 +175,8 @@ impl ShoulderJointModel {
             let command = s.stiffness * (desired[j] - self.phi[j])
                 + s.damping * (target.1[j] - self.rate[j])
                 + holding[j];
-            let limit = s.strength * target_holding[j].abs() + s.strength_floor;
+            let limit =
+                s.strength * target_holding[j].abs().max(holding[j].abs()) + s.strength_floor;
             let motor = (1.0 - self.impairment) * command.clamp(-limit, limit);
             let acceleration = (motor - holding[j] + external[j]) / s.inertia;
             self.rate[j] += acceleration * PHYSICS_STEP;
