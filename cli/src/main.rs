@@ -2,6 +2,7 @@
 //! JSON keys, exit codes) is `../shared/spec/cli.md`; each subcommand lives in
 //! its own module and returns a [`CliError`] that maps to the exit code.
 
+mod arebo;
 mod config;
 mod error;
 mod estimate;
@@ -43,6 +44,11 @@ enum Command {
     },
     /// Supervise a kernel over Zenoh: run a node, send commands, query.
     Zenoh(zenoh::ZenohArgs),
+    /// AREBO adapter: calibrate or run a device, or simulate one.
+    Arebo {
+        #[command(subcommand)]
+        command: arebo::AreboCommand,
+    },
 }
 
 fn main() {
@@ -52,6 +58,7 @@ fn main() {
         Command::Config => config::run(),
         Command::Estimate { log, method, json } => estimate::run(&log, method, json),
         Command::Zenoh(args) => zenoh::run(args),
+        Command::Arebo { command } => arebo::run(command),
     };
     if let Err(error) = result {
         eprintln!("limb: {error}");

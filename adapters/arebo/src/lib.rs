@@ -1,0 +1,44 @@
+//! # limb-arebo
+//!
+//! Adapter for AREBO (Mathavan Jeyabalan et al., *Robotics* 2023, 12, 149),
+//! a 6-DoF self-aligning end-effector robot whose three actuated joints
+//! θ1..θ3 place a spherical joint (θ4..θ6) at the person's upper arm.
+//!
+//! The limb kernel is planar (sagittal frame S); AREBO's arm model is 3-D,
+//! so its geometry lives here, in `no_std`, heap-free, panic-free modules
+//! the kernel could host later:
+//!
+//! ```text
+//! encoder counts ─▶ encoder ─▶ kinematics (FK, IK, Jacobian)
+//!                                   │ endpoint p_r (frame R0)
+//!     calibration (plane ─▶ ψx, sphere ─▶ origin, l) ─▶ ValidatedArmModel
+//!                                   │
+//!                    human (φ1, φ2, J_h, τ_h) ─▶ control (τ_g, torque PD,
+//!                                   unassisted / weight support, adaptive α)
+//!                                   │           safety (typed verdicts)
+//!                    supervisor (one frame → τ_d or a latched safe stop)
+//!                    protocol (framing, streaming decoder)
+//! ```
+//!
+//! Frames: R0 is the robot base (z up, gravity −z); H0 is the human base
+//! frame, R0 rotated about x_R0 by ψx and translated to the shoulder centre.
+//! All quantities SI (m, rad, N, N m, s) unless a name says otherwise.
+//!
+//! With the `std` feature (default) the crate also carries [`sim`], the
+//! shoulder joint model (SJM) used to reproduce the paper's experiments.
+
+#![cfg_attr(not(feature = "std"), no_std)]
+#![forbid(unsafe_code)]
+
+pub mod calibration;
+pub mod control;
+pub mod encoder;
+pub mod human;
+pub mod kinematics;
+#[cfg(feature = "std")]
+pub mod link;
+pub mod protocol;
+pub mod safety;
+#[cfg(feature = "std")]
+pub mod sim;
+pub mod supervisor;

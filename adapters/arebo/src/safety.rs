@@ -1,0 +1,206 @@
+//! Safety verdicts for AREBO.
+//!
+//! The kernel's [`limb_kernel::monitor::Violation`] carries a
+//! [`limb_kernel::monitor::Limit`], a closed enum of the planar kernel's
+//! limits (it has shoulder elevation and elbow flexion but no abduction,
+//! and the kernel may not be edited from here). AREBO therefore wraps it:
+//! [`AreboLimit::Kernel`] reuses the kernel's codes for the kinds both
+//! share (stale sensor, non-finite sensor, force, torque) and adds the 3-D
+//! shoulder's flexion and abduction limits. Codes stay stable: kernel codes
+//! as they are, AREBO's own from 100.
+
+use crate::human::ShoulderAngles;
+use limb_kernel::config::Interval;
+use limb_kernel::monitor::Limit;
+use nalgebra::Vector3;
+
+/// Which limit an AREBO verdict crossed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AreboLimit {
+    /// A limit the kernel also has (same code).
+    Kernel(Limit),
+    /// Shoulder flexion/extension φ1 outside its range [rad].
+    Flexion,
+    /// Shoulder abduction/adduction φ2 outside its range [rad].
+    Abduction,
+}
+
+impl AreboLimit {
+    /// Stable numeric code (kernel codes below 100).
+    pub fn code(self) -> u16 {
+        match self {
+            AreboLimit::Kernel(limit) => limit.code(),
+            AreboLimit::Flexion => 100,
+            AreboLimit::Abduction => 101,
+        }
+    }
+}
+
+/// A crossed limit with the measured value and the bound.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AreboViolation {
+    /// Which limit.
+    pub limit: AreboLimit,
+    /// Measured value (NaN for non-finite input).
+    pub value: f64,
+    /// The bound crossed.
+    pub bound: f64,
+}
+
+/// A verdict.
+pub type AreboVerdict = Result<(), AreboViolation>;
+
+/// Limits of the AREBO safety check.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SafetyLimits {
+    /// Allowed φ1 [rad] (default −20°..120°: flexion task 0-90° plus margin).
+    pub flexion: Interval,
+    /// Allowed φ2 [rad] (default ±50°: the weight support clamps at ±45°).
+    pub abduction: Interval,
+    /// Largest interaction force magnitude [N] (default 60 N: the SJM load
+    /// cell ranges 100 N; the paper's zero-torque median is 5.88 N).
+    pub max_force: f64,
+    /// Largest |torque sensor reading| per actuated joint [N m] (sensor
+    /// ranges 40, 20, 20 N m, paper Table 2).
+    pub max_torque: [f64; 3],
+    /// Oldest acceptable sensor frame [s] (default 0.05 s: ten 200 Hz
+    /// periods).
+    pub stale_after: f64,
+}
+
+impl Default for SafetyLimits {
+    fn default() -> Self {
+        Self {
+            flexion: Interval::new((-20f64).to_radians(), 120f64.to_radians()),
+            abduction: Interval::new((-50f64).to_radians(), 50f64.to_radians()),
+            max_force: 60.0,
+            max_torque: [40.0, 20.0, 20.0],
+            stale_after: 0.05,
+        }
+    }
+}
+
+fn at_most(limit: AreboLimit, value: f64, bound: f64) -> AreboVerdict {
+    if value <= bound {
+        Ok(())
+    } else {
+        Err(AreboViolation {
+            limit,
+            value,
+            bound,
+        })
+    }
+}
+
+fn within(limit: AreboLimit, value: f64, range: Interval) -> AreboVerdict {
+    if value < range.low {
+        Err(AreboViolation {
+            limit,
+            value,
+            bound: range.low,
+        })
+    } else if range.contains(value) {
+        Ok(())
+    } else {
+        Err(AreboViolation {
+            limit,
+            value,
+            bound: range.high,
+        })
+    }
+}
+
+/// Age check: the newest frame, stamped `frame_time` [s], at `now` [s].
+/// No frame at all, a non-finite time or a frame from the future count as
+/// stale.
+pub fn check_fresh(frame_time: Option<f64>, now: f64, limits: &SafetyLimits) -> AreboVerdict {
+    let stale = AreboLimit::Kernel(Limit::StaleSensor);
+    let Some(time) = frame_time else {
+        return Err(AreboViolation {
+            limit: stale,
+            value: f64::INFINITY,
+            bound: limits.stale_after,
+        });
+    };
+    let age = now - time;
+    if age < 0.0 {
+        return Err(AreboViolation {
+            limit: stale,
+            value: age,
+            bound: 0.0,
+        });
+    }
+    at_most(stale, age, limits.stale_after)
+}
+
+/// Checks one frame's derived quantities: shoulder angles, interaction
+/// force [N, frame R0] and torque sensor readings [N m].
+pub fn check_frame(
+    phi: ShoulderAngles,
+    force: &Vector3<f64>,
+    torques: &Vector3<f64>,
+    limits: &SafetyLimits,
+) -> AreboVerdict {
+    let finite = force.iter().chain(torques.iter()).all(|v| v.is_finite())
+        && phi.flexion.is_finite()
+        && phi.abduction.is_finite();
+    if !finite {
+        return Err(AreboViolation {
+            limit: AreboLimit::Kernel(Limit::NonFiniteSensor),
+            value: f64::NAN,
+            bound: 0.0,
+        });
+    }
+    within(AreboLimit::Flexion, phi.flexion, limits.flexion)?;
+    within(AreboLimit::Abduction, phi.abduction, limits.abduction)?;
+    at_most(
+        AreboLimit::Kernel(Limit::ForceMagnitude),
+        force.norm(),
+        limits.max_force,
+    )?;
+    for (torque, bound) in torques.iter().zip(limits.max_torque) {
+        at_most(
+            AreboLimit::Kernel(Limit::Torque),
+            libm::fabs(*torque),
+            bound,
+        )?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn verdicts_name_the_limit() {
+        let limits = SafetyLimits::default();
+        assert!(check_fresh(Some(1.0), 1.01, &limits).is_ok());
+        let stale = check_fresh(Some(1.0), 1.2, &limits).unwrap_err();
+        assert_eq!(stale.limit.code(), Limit::StaleSensor.code());
+        assert!(check_fresh(None, 0.0, &limits).is_err());
+        let phi = ShoulderAngles {
+            flexion: 0.5,
+            abduction: 1.2,
+        };
+        let zero = Vector3::zeros();
+        assert_eq!(
+            check_frame(phi, &zero, &zero, &limits).unwrap_err().limit,
+            AreboLimit::Abduction
+        );
+        let phi = ShoulderAngles {
+            flexion: 0.5,
+            abduction: 0.0,
+        };
+        let push = Vector3::new(0.0, 70.0, 0.0);
+        assert_eq!(
+            check_frame(phi, &push, &zero, &limits).unwrap_err().limit,
+            AreboLimit::Kernel(Limit::ForceMagnitude)
+        );
+        let nan = Vector3::new(f64::NAN, 0.0, 0.0);
+        assert_eq!(
+            check_frame(phi, &zero, &nan, &limits).unwrap_err().limit,
+            AreboLimit::Kernel(Limit::NonFiniteSensor)
+        );
+    }
+}
