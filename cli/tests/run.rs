@@ -19,14 +19,7 @@ fn limb(args: &[&str]) -> (i32, String, String) {
 /// a model within 1 mm of the truth.
 #[test]
 fn every_benchmark_arm_completes_without_monitor_events() {
-    for (l1, l2) in [
-        (0.33, 0.20),
-        (0.33, 0.18),
-        (0.30, 0.20),
-        (0.30, 0.18),
-        (0.27, 0.20),
-        (0.27, 0.18),
-    ] {
+    for (l1, l2) in limb_sim::BENCHMARK_ARMS {
         let (code, out, err) = limb(&[
             "run",
             "--l1",

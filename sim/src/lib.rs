@@ -20,5 +20,5 @@ pub mod params;
 pub mod plant;
 pub mod scripted;
 
-pub use params::{ArmParameters, PlantParameters, RobotParameters};
+pub use params::{ArmParameters, PlantParameters, RobotParameters, BENCHMARK_ARMS};
 pub use plant::{Measurement, Plant, Truth, STEP};

@@ -1,5 +1,16 @@
 //! Parameters of the reference plant, with the defaults of `plant.md`.
 
+/// The six benchmark arms of `plant.md` (the paper's Table 1): (l1, l2) [m],
+/// case 1 first.
+pub const BENCHMARK_ARMS: [(f64, f64); 6] = [
+    (0.33, 0.20),
+    (0.33, 0.18),
+    (0.30, 0.20),
+    (0.30, 0.18),
+    (0.27, 0.20),
+    (0.27, 0.18),
+];
+
 /// The passive arm: uniform rods, frame S (shoulder at (l1 + l2, 0)).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ArmParameters {

@@ -3,16 +3,7 @@
 //! from an independent implementation within 0.5 mm RMS, psi within 1 mrad.
 
 use limb_sim::scripted::estimation_run;
-use limb_sim::{Plant, PlantParameters};
-
-const ARMS: [(f64, f64); 6] = [
-    (0.33, 0.20),
-    (0.33, 0.18),
-    (0.30, 0.20),
-    (0.30, 0.18),
-    (0.27, 0.20),
-    (0.27, 0.18),
-];
+use limb_sim::{Plant, PlantParameters, BENCHMARK_ARMS as ARMS};
 
 fn reference(case: usize) -> Vec<(f64, f64, f64, f64)> {
     let path = format!(
