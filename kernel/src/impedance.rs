@@ -250,6 +250,32 @@ mod tests {
     }
 
     #[test]
+    fn any_saturation_counts() {
+        let none = Saturation::default();
+        assert!(!none.any());
+        for flagged in [
+            Saturation {
+                force: true,
+                ..none
+            },
+            Saturation {
+                torque: true,
+                ..none
+            },
+            Saturation {
+                speed: true,
+                ..none
+            },
+            Saturation {
+                non_finite: true,
+                ..none
+            },
+        ] {
+            assert!(flagged.any(), "{flagged:?}");
+        }
+    }
+
+    #[test]
     fn non_finite_gives_zero_wrench() {
         let out = law().command(
             Pose::new(f64::NAN, 0.0, 0.0),
