@@ -25,7 +25,7 @@
 
 use crate::arm::JointAngles;
 use crate::command::{Command, CommandMode};
-use crate::config::{ConfigError, KernelConfig};
+use crate::config::{ConfigError, KernelConfig, SafetyLimits};
 use crate::geometry::{Pose, Wrench};
 use crate::impedance::{ImpedanceLaw, Saturation};
 use crate::monitor::force::ForceMonitor;
@@ -108,6 +108,17 @@ pub enum RefusalReason {
     Target(TargetError),
     /// The estimation motion could not be planned.
     Plan(crate::motion::PlanError),
+}
+
+/// Why new safety limits were refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum LimitUpdateRefusal {
+    /// Limits change only while the arm is held still: in Grasp, Validated
+    /// or SafeStop, never during the estimation motion or a manipulation.
+    NotAllowedInState(StateKind),
+    /// The configuration with the new limits fails [`KernelConfig::check`].
+    Invalid(ConfigError),
 }
 
 /// A refused request: what was asked, in which state, and why.
@@ -304,6 +315,36 @@ impl Kernel {
                 Err(refusal)
             }
         }
+    }
+
+    /// Replaces the safety limits (REQ-SM-007). Allowed only while the arm
+    /// is held still (Grasp, Validated, SafeStop) and only for limits that
+    /// pass [`KernelConfig::check`] with the rest of the configuration. The
+    /// impedance saturation follows the new limits at once and the rate
+    /// window starts afresh; a pose already outside tighter limits stops
+    /// the kernel at the next step, as any violation does.
+    ///
+    /// # Errors
+    /// Why the limits were refused; the configuration is then unchanged.
+    pub fn update_limits(&mut self, limits: SafetyLimits) -> Result<(), LimitUpdateRefusal> {
+        let state = self.state.kind();
+        if matches!(state, StateKind::Estimate | StateKind::Manipulate) {
+            return Err(LimitUpdateRefusal::NotAllowedInState(state));
+        }
+        let config = KernelConfig {
+            limits,
+            ..self.config
+        };
+        config.check().map_err(LimitUpdateRefusal::Invalid)?;
+        self.config = config;
+        self.law = ImpedanceLaw::new(
+            &config.impedance,
+            limits.max_force,
+            limits.max_torque,
+            limits.max_speed,
+        );
+        self.rates = RateWindow::new(limits.rate_window);
+        Ok(())
     }
 
     /// The latest measured pose, if fresh and finite at `now`.

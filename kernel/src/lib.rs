@@ -51,6 +51,6 @@ pub mod validate;
 
 pub use command::{Command, CommandMode};
 pub use config::KernelConfig;
-pub use kernel::{Kernel, Refusal, RefusalReason, Request, State};
+pub use kernel::{Kernel, LimitUpdateRefusal, Refusal, RefusalReason, Request, State};
 pub use path::PathSample;
 pub use state::{StateKind, StopReason};

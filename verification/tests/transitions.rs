@@ -126,3 +126,46 @@ fn req_sm_004_start_needs_fresh_data_and_a_sane_clock() {
     assert_eq!(refusal.reason, RefusalReason::InvalidTime);
     assert_eq!(kernel.state().kind(), StateKind::Validated);
 }
+
+/// REQ-SM-007: limits change only while the arm is held still and only
+/// to a valid configuration; a refusal leaves the configuration as it was,
+/// and an accepted change takes effect at the next step.
+#[test]
+fn req_sm_007_limits_change_only_while_held_and_only_when_valid() {
+    use limb_kernel::config::{ConfigError, SafetyLimits};
+    use limb_kernel::LimitUpdateRefusal;
+    let tighter = SafetyLimits {
+        max_force: 5.0,
+        ..SafetyLimits::default()
+    };
+    for state in StateKind::ALL {
+        let (mut kernel, _) = kernel_in(state);
+        let result = kernel.update_limits(tighter);
+        if matches!(state, StateKind::Estimate | StateKind::Manipulate) {
+            assert_eq!(result, Err(LimitUpdateRefusal::NotAllowedInState(state)));
+            assert_eq!(kernel.config().limits, SafetyLimits::default());
+        } else {
+            assert_eq!(result, Ok(()), "{state:?}");
+            assert_eq!(kernel.config().limits.max_force, 5.0);
+        }
+    }
+    let (mut kernel, t) = kernel_in(StateKind::Validated);
+    let invalid = SafetyLimits {
+        max_speed: -1.0,
+        ..SafetyLimits::default()
+    };
+    assert_eq!(
+        kernel.update_limits(invalid),
+        Err(LimitUpdateRefusal::Invalid(ConfigError::Limit))
+    );
+    assert_eq!(kernel.config().limits, SafetyLimits::default());
+    // The scenario's 11 N lift wrench is beyond a 5 N limit: the next step stops.
+    kernel.update_limits(tighter).unwrap();
+    let arm = arm(0.30, 0.20);
+    let frame = limb_verification::scenario::lift_frame(&arm, t);
+    let next = limb_kernel::PathSample {
+        time: t + 0.01,
+        ..frame
+    };
+    assert_eq!(kernel.step(&next, t + 0.01).state, StateKind::SafeStop);
+}

@@ -31,7 +31,9 @@ use crate::wire::{
     Heartbeat, KernelStatus, LinkMessage, NodeCounters, RefuseReason, SampleMessage, StateSnapshot,
     SupervisorCommand, WireFormat, MAX_COMMAND_LENGTH,
 };
-use limb_kernel::{Command, Kernel, KernelConfig, PathSample, Request, StateKind};
+use limb_kernel::{
+    Command, Kernel, KernelConfig, LimitUpdateRefusal, PathSample, Request, StateKind,
+};
 use std::sync::atomic::{AtomicU64, AtomicU8, Ordering};
 use std::sync::mpsc::{sync_channel, Receiver, SyncSender, TryRecvError, TrySendError};
 use std::sync::{Arc, Mutex};
@@ -274,15 +276,23 @@ impl Supervision {
             SupervisorCommand::Stop => Request::Stop,
             SupervisorCommand::Reset => Request::Reset,
             SupervisorCommand::UpdateLimits { limits } => {
-                let candidate = KernelConfig {
-                    limits,
-                    ..*kernel.config()
+                let outcome = match kernel.update_limits(limits) {
+                    Ok(()) => AckOutcome::Accepted {
+                        state: kernel.state().kind(),
+                    },
+                    Err(LimitUpdateRefusal::Invalid(error)) => AckOutcome::Refused {
+                        reason: RefuseReason::InvalidLimits { error },
+                    },
+                    Err(LimitUpdateRefusal::NotAllowedInState(state)) => AckOutcome::Refused {
+                        reason: RefuseReason::LimitsNotAllowedInState { state },
+                    },
                 };
-                let reason = match candidate.check() {
-                    Err(error) => RefuseReason::InvalidLimits { error },
-                    Ok(()) => RefuseReason::LimitsFixedAtRunTime,
-                };
-                return self.refuse(Some(message.sequence), reason);
+                self.ack(Ack {
+                    subject: AckSubject::Request,
+                    sequence: Some(message.sequence),
+                    outcome,
+                });
+                return;
             }
         };
         let result = kernel.request(request, now);

@@ -140,9 +140,9 @@ pub enum SupervisorCommand {
     Stop,
     /// `Request::Reset` after a safe stop.
     Reset,
-    /// New safety limits. The kernel has no run-time limit update, so the
-    /// node checks them with `KernelConfig::check` and then refuses with
-    /// [`RefuseReason::LimitsFixedAtRunTime`].
+    /// New safety limits, through `Kernel::update_limits`: accepted only
+    /// while the arm is held still and only when `KernelConfig::check`
+    /// passes.
     UpdateLimits {
         /// The proposed limits.
         limits: SafetyLimits,
@@ -202,10 +202,11 @@ pub enum RefuseReason {
         /// The first unusable group.
         error: ConfigError,
     },
-    /// The limits were valid, but the kernel has no API to change its
-    /// configuration while running: restart the node with the new
-    /// configuration.
-    LimitsFixedAtRunTime,
+    /// Limits change only in Grasp, Validated or SafeStop.
+    LimitsNotAllowedInState {
+        /// The state the kernel was in.
+        state: StateKind,
+    },
 }
 
 /// The result of a command.
