@@ -9,10 +9,16 @@ pub struct Gaussian {
 }
 
 impl Gaussian {
-    /// A generator for `seed` (any value; zero is remapped).
+    /// A generator for `seed`: every seed gives its own stream (the seed
+    /// goes through splitmix64, whose output is never zero for xorshift's
+    /// sake — a zero is replaced by a constant).
     pub fn new(seed: u64) -> Self {
+        let mut z = seed.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
         Self {
-            state: seed ^ 0x9E37_79B9_7F4A_7C15 | 1,
+            state: if z == 0 { 0x2545_F491_4F6C_DD1D } else { z },
             spare: None,
         }
     }

@@ -20,4 +20,6 @@ fn same_seed_same_log() {
     let a = run(7);
     assert_eq!(a, run(7));
     assert_ne!(a, run(8));
+    // Neighbouring seeds must not share a stream.
+    assert_ne!(run(2), run(3));
 }
