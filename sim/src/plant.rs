@@ -14,8 +14,8 @@
 //! new velocities. The robot logs f_ext = −F.
 //!
 //! # Unmodelled effects
-//! [`Plant::with_effects`] adds the effects of [`crate::effects`]: friction,
-//! active torque and tilt change the generalised forces, mass mismatch and
+//! [`Plant::with_effects`] adds the effects of [`crate::effects`]: friction
+//! and active torque change the generalised forces, mass mismatch and
 //! grasp slip the arm's parameters, shoulder drift moves the whole arm;
 //! compliance, tilt, latency, backlash and quantization change what
 //! [`Plant::measure`] returns, in that order, noise being added before the
@@ -167,10 +167,6 @@ impl Plant {
         let r = &self.params.robot;
         let d = r.damping();
         let mut t = arm_terms(a, q, qd);
-        if let Some(tilt) = self.effects.plane_tilt {
-            let scale = tilt.angle.cos();
-            t.gravity = t.gravity.map(|g| g * scale);
-        }
         if self.effects.shoulder_drift.is_some() {
             t.pose[0] += self.shoulder_offset[0];
             t.pose[1] += self.shoulder_offset[1];

@@ -134,8 +134,22 @@ fn no_effect_or_a_neutral_one_is_byte_identical_to_nominal() {
     }
 }
 
-/// Upper bounds on the RMS difference to the shared logs (x, z in m, psi
-/// in rad, fz in N); measured values are in sim/README.md.
+/// Allowed RMS difference to a shared log, in noise sigmas per channel
+/// (x, z, psi, y, fx, fz, ty). Noise-level agreement is 1 sigma; rounding
+/// amplifies the noise near quantisation steps; shoulder drift matches only
+/// roughly (see sim/README.md).
+fn tolerance(file: &str) -> [f64; 7] {
+    match file {
+        "quantization.csv" => [6.0, 6.0, 4.0, 1.5, 1.5, 1.5, 1.5],
+        "shoulder_drift.csv" => [60.0, 60.0, 6.0, 1.5, 3.0, 3.0, 3.0],
+        _ => [1.5; 7],
+    }
+}
+
+/// Our noise-off run of each shared log's case and parameters agrees with
+/// that noisy log within [`tolerance`]. Run with `--nocapture` for the
+/// table of sim/README.md (RMS without / with the effect: x, z [mm],
+/// psi [mrad], y [mm], fz [N]).
 #[test]
 fn simulation_of_each_shared_log_matches_it() {
     for label in labels() {
@@ -159,5 +173,15 @@ fn simulation_of_each_shared_log_matches_it() {
             without[5],
             with[5],
         );
+        let limit = tolerance(&label.file);
+        for i in 0..7 {
+            assert!(
+                with[i] < limit[i] * SIGMA[i],
+                "{}: channel {i} RMS {} above {} sigma",
+                label.file,
+                with[i],
+                limit[i]
+            );
+        }
     }
 }

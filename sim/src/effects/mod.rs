@@ -12,10 +12,9 @@
 //! that [`crate::Plant::with_effects`] applies:
 //!
 //! * measurement side (change what `measure()` returns): `backlash`,
-//!   `quantization`, `latency`, `grasp_compliance`, and the lateral display
-//!   of `plane_tilt`;
+//!   `quantization`, `latency`, `grasp_compliance`, `plane_tilt`;
 //! * dynamics side (change the plant): `joint_friction`, `mass_mismatch`,
-//!   `plane_tilt`, `shoulder_drift`, `active_torque`, `grasp_slip`.
+//!   `shoulder_drift`, `active_torque`, `grasp_slip`.
 //!
 //! With no effect the plant is bit-identical to the nominal one.
 
