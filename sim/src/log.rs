@@ -52,9 +52,9 @@ const OPTIONAL: [&str; 10] = [
 /// A fault in a log file.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum LogError {
-    /// The file could not be read.
+    /// The file could not be read or written.
     #[error("{file}: {message}")]
-    Unreadable {
+    Io {
         /// The file.
         file: String,
         /// What the operating system said.
@@ -153,10 +153,10 @@ pub fn to_csv(records: &[Record]) -> String {
 /// Writes the rows of a scripted run to `file`.
 ///
 /// # Errors
-/// [`LogError::Unreadable`] when the file cannot be written.
+/// [`LogError::Io`] when the file cannot be written.
 pub fn write(file: &Path, rows: &[Row]) -> Result<(), LogError> {
     let records: Vec<Record> = rows.iter().map(Record::from_row).collect();
-    std::fs::write(file, to_csv(&records)).map_err(|error| LogError::Unreadable {
+    std::fs::write(file, to_csv(&records)).map_err(|error| LogError::Io {
         file: file.display().to_string(),
         message: error.to_string(),
     })
@@ -168,7 +168,7 @@ pub fn write(file: &Path, rows: &[Row]) -> Result<(), LogError> {
 /// [`LogError`] naming the file (and line) of the first fault.
 pub fn read(file: &Path) -> Result<Vec<Record>, LogError> {
     let name = file.display().to_string();
-    let text = std::fs::read_to_string(file).map_err(|error| LogError::Unreadable {
+    let text = std::fs::read_to_string(file).map_err(|error| LogError::Io {
         file: name.clone(),
         message: error.to_string(),
     })?;
