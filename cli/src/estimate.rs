@@ -3,7 +3,6 @@
 //! Ground-truth columns of the log are never read.
 
 use crate::error::{emit, print_json, CliError};
-use crate::robot_log;
 use limb_kernel::estimation::{estimate_arm, FitEvidence, Method};
 use limb_kernel::path::PATH_CAPACITY;
 use std::path::Path;
@@ -47,7 +46,11 @@ struct EstimateReport {
 /// [`CliError::BadInput`] for an unreadable or malformed log, one longer than
 /// the kernel's path buffer, or a log the estimator cannot fit.
 pub fn run(log: &Path, method: MethodArg, json: bool) -> Result<(), CliError> {
-    let path = robot_log::read(log)?;
+    let path: Vec<_> = limb_sim::log::read(log)
+        .map_err(|error| CliError::BadInput(error.to_string()))?
+        .iter()
+        .map(limb_sim::log::Record::path_sample)
+        .collect();
     if path.len() > PATH_CAPACITY {
         return Err(CliError::BadInput(format!(
             "{}: {} samples, more than the estimator's capacity of {PATH_CAPACITY}",

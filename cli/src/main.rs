@@ -6,11 +6,11 @@ mod arebo;
 mod config;
 mod error;
 mod estimate;
-mod robot_log;
 mod run;
+mod simulate;
 mod zenoh;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use error::CliError;
 use std::path::PathBuf;
 
@@ -42,6 +42,8 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Run the reference plant (optionally with unmodelled effects) and write its log.
+    Simulate(simulate::SimulateArgs),
     /// Supervise a kernel over Zenoh: run a node, send commands, query.
     Zenoh(zenoh::ZenohArgs),
     /// AREBO adapter: calibrate or run a device, or simulate one.
@@ -52,11 +54,28 @@ enum Command {
 }
 
 fn main() {
-    let cli = Cli::parse();
+    // Usage errors are bad input: one line, exit 2 (help and version print
+    // in full and exit 0).
+    let matches = Cli::command()
+        .try_get_matches()
+        .and_then(|matches| Ok((Cli::from_arg_matches(&matches)?, matches)));
+    let (cli, matches) = match matches {
+        Ok(parsed) => parsed,
+        Err(error) if error.use_stderr() => {
+            let text = error.to_string();
+            eprintln!("limb: {}", text.lines().next().unwrap_or("bad arguments"));
+            std::process::exit(2);
+        }
+        Err(error) => error.exit(),
+    };
     let result: Result<(), CliError> = match cli.command {
         Command::Run(args) => run::run(&args),
         Command::Config => config::run(),
         Command::Estimate { log, method, json } => estimate::run(&log, method, json),
+        Command::Simulate(args) => match matches.subcommand_matches("simulate") {
+            Some(sub) => simulate::run(&args, sub),
+            None => Err(CliError::Internal("simulate: no argument matches".into())),
+        },
         Command::Zenoh(args) => zenoh::run(args),
         Command::Arebo { command } => arebo::run(command),
     };

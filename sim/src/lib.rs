@@ -9,16 +9,20 @@
 //! Modules: [`params`] (arm and robot parameters, plant.md defaults),
 //! [`dynamics`] (M, C, g, J, J̇ q̇ of the arm), [`contact`] (the table's two
 //! unilateral constraints), [`plant`] (state, step, measurement),
-//! [`noise`] (the seeded Gaussian generator).
+//! [`noise`] (the seeded Gaussian generator), [`scripted`] (the estimation
+//! run), [`log`] (the CSV log format: writer and the strict reader).
 
 #![forbid(unsafe_code)]
 
 pub mod contact;
 pub mod dynamics;
+pub mod effects;
+pub mod log;
 pub mod noise;
 pub mod params;
 pub mod plant;
 pub mod scripted;
 
+pub use effects::{Effect, EffectError, Effects};
 pub use params::{ArmParameters, PlantParameters, RobotParameters, BENCHMARK_ARMS};
 pub use plant::{Measurement, Plant, Truth, STEP};

@@ -12,13 +12,24 @@
 //! λ from the table's active set ([`crate::contact`]). Semi-implicit Euler
 //! at [`STEP`]: velocities from accelerations first, then positions from the
 //! new velocities. The robot logs f_ext = −F.
+//!
+//! # Unmodelled effects
+//! [`Plant::with_effects`] adds the effects of [`crate::effects`]: friction
+//! and active torque change the generalised forces, mass mismatch and
+//! grasp slip the arm's parameters, shoulder drift moves the whole arm;
+//! compliance, tilt, latency, backlash and quantization change what
+//! [`Plant::measure`] returns, in that order, noise being added before the
+//! quantization. Without effects no extra arithmetic is done, so the nominal
+//! plant is bit-identical.
 
 use crate::contact::{self, ActiveSet, CANDIDATES};
 use crate::dynamics::{apply, apply_transpose, arm_terms, Vec2};
+use crate::effects::Effects;
 use crate::noise::Gaussian;
 use crate::params::PlantParameters;
 use limb_kernel::geometry::{Point, Pose, Wrench};
 use limb_kernel::motion::SetPoint;
+use std::collections::VecDeque;
 
 /// Integration step [s] (0.5 ms).
 pub const STEP: f64 = 0.0005;
@@ -58,6 +69,15 @@ struct Instant {
     wrench: [f64; 3],
 }
 
+/// What the robot's sensors see before noise: pose (x, z, psi), lateral y
+/// and f_ext, exact.
+#[derive(Clone, Copy, Debug)]
+struct Sensed {
+    pose: [f64; 3],
+    lateral: f64,
+    wrench: [f64; 3],
+}
+
 /// The plant.
 #[derive(Clone, Debug)]
 pub struct Plant {
@@ -67,6 +87,15 @@ pub struct Plant {
     steps: u64,
     set_point: SetPoint,
     noise: Gaussian,
+    effects: Effects,
+    /// Backlash follower of psi [rad].
+    follower: f64,
+    /// Sensed values of past steps, newest last (latency only).
+    history: VecDeque<Sensed>,
+    /// Shoulder displacement from its rest position (x, z) [m].
+    shoulder_offset: Vec2,
+    /// The grasp slip has happened.
+    slipped: bool,
 }
 
 impl Plant {
@@ -75,6 +104,18 @@ impl Plant {
     /// # Errors
     /// The first invalid parameter.
     pub fn new(params: PlantParameters) -> Result<Self, String> {
+        Self::with_effects(params, Effects::default())
+    }
+
+    /// The plant with unmodelled `effects` (see [`crate::effects`]).
+    /// `mass_mismatch` is applied to the arm's parameters here.
+    ///
+    /// # Errors
+    /// The first invalid parameter.
+    pub fn with_effects(mut params: PlantParameters, effects: Effects) -> Result<Self, String> {
+        if let Some(mass) = effects.mass_mismatch {
+            params.arm.forearm_mass *= mass.factor;
+        }
         params.check()?;
         Ok(Self {
             params,
@@ -83,7 +124,17 @@ impl Plant {
             steps: 0,
             set_point: SetPoint::default(),
             noise: Gaussian::new(params.seed),
+            effects,
+            follower: 0.0,
+            history: VecDeque::new(),
+            shoulder_offset: [0.0, 0.0],
+            slipped: false,
         })
+    }
+
+    /// The effects this plant applies.
+    pub fn effects(&self) -> &Effects {
+        &self.effects
     }
 
     /// Parameters.
@@ -115,7 +166,11 @@ impl Plant {
         let a = &self.params.arm;
         let r = &self.params.robot;
         let d = r.damping();
-        let t = arm_terms(a, q, qd);
+        let mut t = arm_terms(a, q, qd);
+        if self.effects.shoulder_drift.is_some() {
+            t.pose[0] += self.shoulder_offset[0];
+            t.pose[1] += self.shoulder_offset[1];
+        }
         let v = apply(&t.jacobian, qd);
         let sp = &self.set_point;
         let xd = [sp.pose.x, sp.pose.z, sp.pose.psi];
@@ -136,10 +191,18 @@ impl Plant {
             }
         }
         let jf = apply_transpose(&t.jacobian, f0);
-        let rhs = [
+        let mut rhs = [
             jf[0] - t.coriolis[0] - t.gravity[0],
             jf[1] - t.coriolis[1] - t.gravity[1],
         ];
+        if let Some(friction) = self.effects.joint_friction {
+            let tau = friction.torques(qd);
+            rhs[0] += tau[0];
+            rhs[1] += tau[1];
+        }
+        if let Some(active) = self.effects.active_torque {
+            rhs[1] += active.torque(self.time());
+        }
         let (qdd, lambda) = contact::solve(set, &mass, rhs)?;
         let acc = apply(&t.jacobian, qdd);
         let mut wrench = [0.0; 3];
@@ -179,17 +242,67 @@ impl Plant {
         fallback
     }
 
-    /// The exact (noise-free) pose and wrench of this instant.
-    fn exact(&self) -> ([f64; 3], [f64; 3]) {
-        let (_, _, instant) = self.resolve();
-        instant.map_or(([f64::NAN; 3], [f64::NAN; 3]), |i| {
-            (i.pose, [-i.wrench[0], -i.wrench[1], -i.wrench[2]])
-        })
+    /// What the sensors see at `instant`, noise-free: grasp compliance and
+    /// plane tilt applied.
+    fn sense(&self, instant: Option<Instant>) -> Sensed {
+        let Some(i) = instant else {
+            return Sensed {
+                pose: [f64::NAN; 3],
+                lateral: f64::NAN,
+                wrench: [f64::NAN; 3],
+            };
+        };
+        let wrench = [-i.wrench[0], -i.wrench[1], -i.wrench[2]];
+        let mut pose = i.pose;
+        if let Some(compliance) = self.effects.grasp_compliance {
+            pose = compliance.end_effector(pose, wrench);
+        }
+        let mut lateral = 0.0;
+        if let Some(tilt) = self.effects.plane_tilt {
+            let (sin, cos) = tilt.angle.sin_cos();
+            lateral = pose[1] * sin;
+            pose[1] *= cos;
+        }
+        Sensed {
+            pose,
+            lateral,
+            wrench,
+        }
+    }
+
+    /// The sensed values of this instant, `latency` old when it is on.
+    fn sensed(&self) -> Sensed {
+        let now = || self.sense(self.resolve().2);
+        let Some(latency) = self.effects.latency else {
+            return now();
+        };
+        let delay = latency.steps();
+        if delay == 0 {
+            return now();
+        }
+        match self.history.len().checked_sub(delay) {
+            Some(index) => self.history.get(index).copied().unwrap_or_else(now),
+            None => self.history.front().copied().unwrap_or_else(now),
+        }
     }
 
     /// One step of [`STEP`] seconds.
     pub fn step(&mut self) {
         let (mut q, mut qd, instant) = self.resolve();
+        if let Some(latency) = self.effects.latency {
+            let sensed = self.sense(instant);
+            self.history.push_back(sensed);
+            while self.history.len() > latency.steps() {
+                self.history.pop_front();
+            }
+        }
+        if let (Some(drift), Some(i)) = (self.effects.shoulder_drift, instant) {
+            self.shoulder_offset = if q[0] > 0.0 {
+                drift.displacement([i.wrench[0], i.wrench[1]])
+            } else {
+                [0.0, 0.0]
+            };
+        }
         if let Some(instant) = instant {
             for i in 0..2 {
                 qd[i] += instant.qdd[i] * STEP;
@@ -200,19 +313,37 @@ impl Plant {
         self.q = q;
         self.qd = qd;
         self.steps += 1;
+        if let Some(slip) = self.effects.grasp_slip {
+            if !self.slipped && self.time() >= slip.at {
+                self.params.arm.forearm_length += slip.shift;
+                self.slipped = true;
+            }
+        }
     }
 
     /// What the robot measures now (draws noise when noise is on).
     pub fn measure(&mut self) -> Measurement {
-        let (pose, wrench) = self.exact();
+        let Sensed {
+            mut pose,
+            lateral,
+            wrench,
+        } = self.sensed();
+        if let Some(backlash) = self.effects.backlash {
+            self.follower = backlash.follow(self.follower, pose[2]);
+            pose[2] = self.follower;
+        }
         let on = self.params.noise;
         let mut n = |sigma: f64| if on { self.noise.sample(sigma) } else { 0.0 };
         let (px, pz, ppsi) = (n(1e-4), n(1e-4), n(1e-3));
-        let lateral = n(1e-4);
+        let lateral = lateral + n(1e-4);
         let (fx, fz, ty) = (n(0.5), n(0.5), n(0.025));
+        let mut pose = [pose[0] + px, pose[1] + pz, pose[2] + ppsi];
+        if let Some(quantization) = self.effects.quantization {
+            pose = quantization.apply(pose);
+        }
         Measurement {
             time: self.time(),
-            pose: Pose::new(pose[0] + px, pose[1] + pz, pose[2] + ppsi),
+            pose: Pose::new(pose[0], pose[1], pose[2]),
             lateral,
             wrench: Wrench::new(wrench[0] + fx, wrench[1] + fz, wrench[2] + ty),
         }
@@ -222,11 +353,14 @@ impl Plant {
     pub fn truth(&self) -> Truth {
         let a = &self.params.arm;
         let (l1, l2) = (a.upper_arm_length, a.forearm_length);
-        let shoulder = Point::new(l1 + l2, 0.0);
+        let shoulder = Point::new(l1 + l2 + self.shoulder_offset[0], self.shoulder_offset[1]);
         let round = |v: f64| (v / POTENTIOMETER_RESOLUTION).round() * POTENTIOMETER_RESOLUTION;
         Truth {
             q: [round(self.q[0]), round(self.q[1])],
-            elbow: Point::new(shoulder.x - l1 * self.q[0].cos(), l1 * self.q[0].sin()),
+            elbow: Point::new(
+                shoulder.x - l1 * self.q[0].cos(),
+                shoulder.z + l1 * self.q[0].sin(),
+            ),
             shoulder,
         }
     }
