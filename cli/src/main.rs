@@ -3,23 +3,34 @@
 //! its own module and returns a [`CliError`] that maps to the exit code.
 
 mod error;
+mod kuka;
 
 use clap::{Parser, Subcommand};
 use error::CliError;
 
 #[derive(Parser)]
-#[command(name = "limb", version, about = "Control kernel for robots that move a person's arm")]
+#[command(
+    name = "limb",
+    version,
+    about = "Control kernel for robots that move a person's arm"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
 }
 
 #[derive(Subcommand)]
-enum Command {}
+enum Command {
+    /// KUKA LBR iiwa FRI adapter tools.
+    #[command(subcommand)]
+    Kuka(kuka::KukaCommand),
+}
 
 fn main() {
     let cli = Cli::parse();
-    let result: Result<(), CliError> = match cli.command {};
+    let result: Result<(), CliError> = match cli.command {
+        Command::Kuka(command) => kuka::run(command),
+    };
     if let Err(error) = result {
         eprintln!("limb: {error}");
         std::process::exit(error.exit_code());

@@ -1,0 +1,132 @@
+//! `limb kuka ...`: tools for the KUKA FRI adapter (`limb-kuka`).
+
+use clap::Subcommand;
+use limb_kuka::messages::{
+    ClientCommandMode, ConnectionQuality, FriCommandMessage, FriMonitoringMessage, JointValues,
+    MessageHeader, SessionState,
+};
+use limb_kuka::{decode_command, decode_monitoring, FriVersion};
+use serde_json::{json, Value};
+
+use crate::error::{print_json, CliError};
+
+/// KUKA FRI subcommands.
+#[derive(Subcommand)]
+pub enum KukaCommand {
+    /// Decode one FRI datagram (monitoring or command) into JSON.
+    Decode {
+        /// Raw datagram file.
+        file: std::path::PathBuf,
+        /// FRI version: 1.11, 1.14, 1.15, 1.16, 2.5 or 2.7.
+        #[arg(long = "fri-version")]
+        fri_version: String,
+        /// Print JSON (the only output format).
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+/// Runs one `limb kuka` subcommand.
+pub fn run(command: KukaCommand) -> Result<(), CliError> {
+    match command {
+        KukaCommand::Decode {
+            file,
+            fri_version,
+            json: _,
+        } => decode(&file, &fri_version),
+    }
+}
+
+fn decode(file: &std::path::Path, fri_version: &str) -> Result<(), CliError> {
+    let version: FriVersion = fri_version
+        .parse()
+        .map_err(|error| CliError::BadInput(format!("{error}")))?;
+    let bytes = std::fs::read(file)
+        .map_err(|error| CliError::BadInput(format!("{}: {error}", file.display())))?;
+    let value = match decode_monitoring(&bytes, version) {
+        Ok(message) => monitoring_json(&message),
+        Err(monitoring_error) => match decode_command(&bytes, version) {
+            Ok(message) => command_json(&message),
+            Err(command_error) => {
+                return Err(CliError::BadInput(format!(
+                    "{}: not an FRI {version} datagram (as monitoring: {monitoring_error}; as command: {command_error})",
+                    file.display()
+                )))
+            }
+        },
+    };
+    print_json(&value)
+}
+
+fn header_json(header: &MessageHeader) -> Value {
+    json!({
+        "message_identifier": header.message_identifier,
+        "sequence_counter": header.sequence_counter,
+        "reflected_sequence_counter": header.reflected_sequence_counter,
+    })
+}
+
+fn joints_json(values: Option<&JointValues>) -> Value {
+    values.map_or(Value::Null, |values| json!(values.value))
+}
+
+fn enum_name<E: core::fmt::Debug>(raw: i32, convert: impl Fn(i32) -> Option<E>) -> Value {
+    match convert(raw) {
+        Some(known) => json!(screaming_snake(&format!("{known:?}"))),
+        None => json!(raw),
+    }
+}
+
+/// `MonitoringWait` → `MONITORING_WAIT`.
+fn screaming_snake(camel: &str) -> String {
+    let mut out = String::new();
+    for (index, character) in camel.chars().enumerate() {
+        if character.is_uppercase() && index > 0 {
+            out.push('_');
+        }
+        out.push(character.to_ascii_uppercase());
+    }
+    out
+}
+
+fn monitoring_json(message: &FriMonitoringMessage) -> Value {
+    let info = message.connection_info.unwrap_or_default();
+    let monitor = message.monitor_data.clone().unwrap_or_default();
+    let ipo = message.ipo_data.clone().unwrap_or_default();
+    json!({
+        "message": "FRIMonitoringMessage",
+        "header": header_json(&message.header),
+        "connection_info": {
+            "session_state": enum_name(info.session_state, |raw| SessionState::try_from(raw).ok()),
+            "quality": enum_name(info.quality, |raw| ConnectionQuality::try_from(raw).ok()),
+            "send_period": info.send_period,
+            "receive_multiplier": info.receive_multiplier,
+        },
+        "monitor_data": {
+            "measured_joint_position": joints_json(monitor.measured_joint_position.as_ref()),
+            "measured_torque": joints_json(monitor.measured_torque.as_ref()),
+            "commanded_joint_position": joints_json(monitor.commanded_joint_position.as_ref()),
+            "external_torque": joints_json(monitor.external_torque.as_ref()),
+        },
+        "ipo_data": {
+            "joint_position": joints_json(ipo.joint_position.as_ref()),
+            "client_command_mode": ipo.client_command_mode
+                .map(|raw| enum_name(raw, |raw| ClientCommandMode::try_from(raw).ok())),
+            "tracking_performance": ipo.tracking_performance,
+        },
+    })
+}
+
+fn command_json(message: &FriCommandMessage) -> Value {
+    let data = message.command_data.clone().unwrap_or_default();
+    json!({
+        "message": "FRICommandMessage",
+        "header": header_json(&message.header),
+        "command_data": {
+            "joint_position": joints_json(data.joint_position.as_ref()),
+            "joint_torque": joints_json(data.joint_torque.as_ref()),
+            "cartesian_wrench_feed_forward": data.cartesian_wrench_feed_forward
+                .map(|vector| json!(vector.element)),
+        },
+    })
+}
