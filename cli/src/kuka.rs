@@ -5,7 +5,8 @@ use limb_kuka::messages::{
     ClientCommandMode, ConnectionQuality, FriCommandMessage, FriMonitoringMessage, JointValues,
     MessageHeader, SessionState,
 };
-use limb_kuka::{decode_command, decode_monitoring, FriVersion};
+use limb_kuka::vectors::{example_command, example_monitoring, SESSION_STATES};
+use limb_kuka::{decode_command, decode_monitoring, encode_command, encode_monitoring, FriVersion};
 use serde_json::{json, Value};
 
 use crate::error::{print_json, CliError};
@@ -24,6 +25,15 @@ pub enum KukaCommand {
         #[arg(long)]
         json: bool,
     },
+    /// Write example monitoring and command datagrams (`.bin`) and their
+    /// contents (`.json`) for each session state into DIR.
+    Vectors {
+        /// Output directory (created if missing).
+        dir: std::path::PathBuf,
+        /// FRI version: 1.11, 1.14, 1.15, 1.16, 2.5 or 2.7.
+        #[arg(long = "fri-version")]
+        fri_version: String,
+    },
 }
 
 /// Runs one `limb kuka` subcommand.
@@ -34,13 +44,64 @@ pub fn run(command: KukaCommand) -> Result<(), CliError> {
             fri_version,
             json: _,
         } => decode(&file, &fri_version),
+        KukaCommand::Vectors { dir, fri_version } => vectors(&dir, &fri_version),
     }
 }
 
+fn parse_version(text: &str) -> Result<FriVersion, CliError> {
+    text.parse()
+        .map_err(|error| CliError::BadInput(format!("{error}")))
+}
+
+fn vectors(dir: &std::path::Path, fri_version: &str) -> Result<(), CliError> {
+    let version = parse_version(fri_version)?;
+    std::fs::create_dir_all(dir)
+        .map_err(|error| CliError::BadInput(format!("{}: {error}", dir.display())))?;
+    let mut written = Vec::new();
+    for state in SESSION_STATES {
+        let name = screaming_snake(&format!("{state:?}")).to_lowercase();
+        let monitoring = example_monitoring(state, version);
+        let bytes = encode_monitoring(&monitoring, version)
+            .map_err(|error| CliError::Internal(error.to_string()))?;
+        written.push(write_pair(
+            dir,
+            &format!("monitoring_{name}"),
+            &bytes,
+            &monitoring_json(&monitoring),
+        )?);
+        if let Some(command) = example_command(state, version) {
+            let bytes = encode_command(&command, version)
+                .map_err(|error| CliError::Internal(error.to_string()))?;
+            written.push(write_pair(
+                dir,
+                &format!("command_{name}"),
+                &bytes,
+                &command_json(&command),
+            )?);
+        }
+    }
+    print_json(&json!({ "fri_version": version.to_string(), "written": written }))
+}
+
+fn write_pair(
+    dir: &std::path::Path,
+    stem: &str,
+    bytes: &[u8],
+    contents: &Value,
+) -> Result<String, CliError> {
+    let write = |path: std::path::PathBuf, data: &[u8]| {
+        std::fs::write(&path, data)
+            .map_err(|error| CliError::BadInput(format!("{}: {error}", path.display())))
+    };
+    write(dir.join(format!("{stem}.bin")), bytes)?;
+    let text = serde_json::to_string_pretty(contents)
+        .map_err(|error| CliError::Internal(format!("serialising JSON: {error}")))?;
+    write(dir.join(format!("{stem}.json")), text.as_bytes())?;
+    Ok(stem.to_string())
+}
+
 fn decode(file: &std::path::Path, fri_version: &str) -> Result<(), CliError> {
-    let version: FriVersion = fri_version
-        .parse()
-        .map_err(|error| CliError::BadInput(format!("{error}")))?;
+    let version = parse_version(fri_version)?;
     let bytes = std::fs::read(file)
         .map_err(|error| CliError::BadInput(format!("{}: {error}", file.display())))?;
     let value = match decode_monitoring(&bytes, version) {

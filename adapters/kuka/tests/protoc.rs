@@ -119,3 +119,47 @@ fn protoc_decodes_our_datagrams() {
         }
     }
 }
+
+/// Every example vector of every version decodes under protoc with the
+/// expected session state and header.
+#[test]
+fn protoc_decodes_every_vector() {
+    use limb_kuka::vectors::{example_command, example_monitoring, SESSION_STATES};
+    for version in FriVersion::ALL {
+        for state in SESSION_STATES {
+            let monitoring =
+                encode_monitoring(&example_monitoring(state, version), version).unwrap();
+            let Some(text) = protoc_decode(version, "FRIMonitoringMessage", &monitoring) else {
+                eprintln!("SKIPPED: protoc not on PATH (apt-get install -y protobuf-compiler)");
+                return;
+            };
+            let name = match state {
+                SessionState::Idle => "IDLE",
+                SessionState::MonitoringWait => "MONITORING_WAIT",
+                SessionState::MonitoringReady => "MONITORING_READY",
+                SessionState::CommandingWait => "COMMANDING_WAIT",
+                SessionState::CommandingActive => "COMMANDING_ACTIVE",
+            };
+            let state_name = format!("sessionState: {name}");
+            assert!(
+                text.contains(&state_name),
+                "{version}: {state_name} missing in\n{text}"
+            );
+            assert!(text.contains("measuredJointPosition"));
+            if let Some(command) = example_command(state, version) {
+                let bytes = encode_command(&command, version).unwrap();
+                let text = protoc_decode(version, "FRICommandMessage", &bytes).unwrap_or_default();
+                assert!(
+                    text.contains("reflectedSequenceCounter"),
+                    "{version}: {text}"
+                );
+                let expects_position = state >= SessionState::CommandingWait || version.is_v1();
+                assert_eq!(
+                    text.contains("jointPosition"),
+                    expects_position,
+                    "{version} {state:?}: {text}"
+                );
+            }
+        }
+    }
+}
