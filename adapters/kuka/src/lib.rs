@@ -10,6 +10,7 @@
 
 pub mod codec;
 pub mod messages;
+pub mod session;
 pub mod vectors;
 pub mod version;
 
