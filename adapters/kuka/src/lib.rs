@@ -11,6 +11,7 @@
 pub mod codec;
 pub mod messages;
 pub mod session;
+pub mod udp;
 pub mod vectors;
 pub mod version;
 
