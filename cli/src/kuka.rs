@@ -5,9 +5,13 @@ use limb_kuka::messages::{
     ClientCommandMode, ConnectionQuality, FriCommandMessage, FriMonitoringMessage, JointValues,
     MessageHeader, SessionState,
 };
+use limb_kuka::session::{CommandIntent, Controller, MonitoringView};
+use limb_kuka::udp::{CycleOutcome, FriClient};
 use limb_kuka::vectors::{example_command, example_monitoring, SESSION_STATES};
 use limb_kuka::{decode_command, decode_monitoring, encode_command, encode_monitoring, FriVersion};
 use serde_json::{json, Value};
+use std::net::SocketAddr;
+use std::time::{Duration, Instant};
 
 use crate::error::{print_json, CliError};
 
@@ -34,6 +38,77 @@ pub enum KukaCommand {
         #[arg(long = "fri-version")]
         fri_version: String,
     },
+    /// Run the FRI client with a placeholder controller that holds position
+    /// (the kernel is not plugged in yet); prints a cycle summary as JSON.
+    Run {
+        /// FRI version: 1.11, 1.14, 1.15, 1.16, 2.5 or 2.7.
+        #[arg(long = "fri-version")]
+        fri_version: String,
+        /// UDP port to listen on (all interfaces).
+        #[arg(long, default_value_t = 30200)]
+        port: u16,
+        /// Stop after this many seconds.
+        #[arg(long, default_value_t = 10.0)]
+        seconds: f64,
+    },
+}
+
+/// Placeholder controller: always holds (IPO / last target).
+struct HoldController {
+    stale_calls: u64,
+}
+
+impl Controller for HoldController {
+    fn on_monitoring(&mut self, _view: &MonitoringView, _now: f64) -> CommandIntent {
+        CommandIntent::Hold
+    }
+    fn on_link_stale(&mut self, _silent_for: f64, _now: f64) {
+        self.stale_calls += 1;
+    }
+}
+
+/// Largest target change per reply of the placeholder run (rad).
+const RUN_MAX_JOINT_STEP: f64 = 0.001;
+
+fn run_client(fri_version: &str, port: u16, seconds: f64) -> Result<(), CliError> {
+    let version = parse_version(fri_version)?;
+    let duration = Duration::try_from_secs_f64(seconds)
+        .map_err(|error| CliError::BadInput(format!("--seconds {seconds}: {error}")))?;
+    let address = SocketAddr::from(([0, 0, 0, 0], port));
+    let mut client = FriClient::bind(
+        address,
+        version,
+        RUN_MAX_JOINT_STEP,
+        Duration::from_millis(100),
+    )
+    .map_err(|error| CliError::BadInput(format!("{address}: {error}")))?;
+    let mut controller = HoldController { stale_calls: 0 };
+    let (mut answered, mut rejected, mut faults) = (0u64, 0u64, 0u64);
+    let start = Instant::now();
+    while start.elapsed() < duration {
+        match client
+            .run_cycle(&mut controller)
+            .map_err(|error| CliError::Internal(error.to_string()))?
+        {
+            CycleOutcome::Handled {
+                answered: sent,
+                fault,
+                ..
+            } => {
+                answered += u64::from(sent);
+                faults += u64::from(fault.is_some());
+            }
+            CycleOutcome::Rejected(_) => rejected += 1,
+            CycleOutcome::Stale => {}
+        }
+    }
+    print_json(&json!({
+        "fri_version": version.to_string(),
+        "answered": answered,
+        "rejected": rejected,
+        "faults": faults,
+        "stale": controller.stale_calls,
+    }))
 }
 
 /// Runs one `limb kuka` subcommand.
@@ -45,6 +120,11 @@ pub fn run(command: KukaCommand) -> Result<(), CliError> {
             json: _,
         } => decode(&file, &fri_version),
         KukaCommand::Vectors { dir, fri_version } => vectors(&dir, &fri_version),
+        KukaCommand::Run {
+            fri_version,
+            port,
+            seconds,
+        } => run_client(&fri_version, port, seconds),
     }
 }
 
