@@ -6,6 +6,7 @@ mod arebo;
 mod config;
 mod error;
 mod estimate;
+mod kuka;
 mod run;
 mod simulate;
 mod zenoh;
@@ -51,6 +52,9 @@ enum Command {
         #[command(subcommand)]
         command: arebo::AreboCommand,
     },
+    /// KUKA LBR iiwa FRI adapter tools.
+    #[command(subcommand)]
+    Kuka(kuka::KukaCommand),
 }
 
 fn main() {
@@ -78,6 +82,7 @@ fn main() {
         },
         Command::Zenoh(args) => zenoh::run(args),
         Command::Arebo { command } => arebo::run(command),
+        Command::Kuka(command) => kuka::run(command),
     };
     if let Err(error) = result {
         eprintln!("limb: {error}");
