@@ -25,4 +25,6 @@ pub mod scripted;
 
 pub use effects::{Effect, EffectError, Effects};
 pub use params::{ArmParameters, PlantParameters, RobotParameters, BENCHMARK_ARMS};
-pub use plant::{Measurement, Plant, Truth, STEP};
+pub use plant::{
+    Measurement, Plant, Truth, ANGLE_NOISE, FORCE_NOISE, POSITION_NOISE, STEP, TORQUE_NOISE,
+};

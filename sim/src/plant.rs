@@ -33,6 +33,15 @@ use std::collections::VecDeque;
 
 /// Integration step [s] (0.5 ms).
 pub const STEP: f64 = 0.0005;
+/// Measurement noise σ of `plant.md`: position x, z, y [m] (iiwa
+/// repeatability).
+pub const POSITION_NOISE: f64 = 1e-4;
+/// Measurement noise σ of psi [rad].
+pub const ANGLE_NOISE: f64 = 1e-3;
+/// Measurement noise σ of the forces fx, fz [N].
+pub const FORCE_NOISE: f64 = 0.5;
+/// Measurement noise σ of the torque ty [N m].
+pub const TORQUE_NOISE: f64 = 0.025;
 /// Resolution of the ground-truth potentiometers [rad] (10 bit).
 pub const POTENTIOMETER_RESOLUTION: f64 = 0.0047;
 
@@ -334,9 +343,9 @@ impl Plant {
         }
         let on = self.params.noise;
         let mut n = |sigma: f64| if on { self.noise.sample(sigma) } else { 0.0 };
-        let (px, pz, ppsi) = (n(1e-4), n(1e-4), n(1e-3));
-        let lateral = lateral + n(1e-4);
-        let (fx, fz, ty) = (n(0.5), n(0.5), n(0.025));
+        let (px, pz, ppsi) = (n(POSITION_NOISE), n(POSITION_NOISE), n(ANGLE_NOISE));
+        let lateral = lateral + n(POSITION_NOISE);
+        let (fx, fz, ty) = (n(FORCE_NOISE), n(FORCE_NOISE), n(TORQUE_NOISE));
         let mut pose = [pose[0] + px, pose[1] + pz, pose[2] + ppsi];
         if let Some(quantization) = self.effects.quantization {
             pose = quantization.apply(pose);

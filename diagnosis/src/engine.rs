@@ -1,0 +1,517 @@
+//! The diagnosis engine: fit every candidate effect on the fit data,
+//! score it on the held-out data, rank, and add effects one at a time
+//! while each addition earns its parameters.
+//!
+//! # Theory of operation
+//! For a set of effects S with k fitted parameters, the fit minimises the
+//! sum of squared scaled residuals on the fit samples ([`crate::optimize`],
+//! bounded and deterministic); the set is then judged only on held-out
+//! samples, by the **held-out information criterion** relative to the
+//! set it extends (S₀, the nominal sim at first):
+//!
+//! ```text
+//! known noise (floor > 0):   Δ = (SS₀ − SS) / floor − k ln n
+//! unknown noise (floor = 0): Δ = n ln(SS₀ / SS)     − k ln n
+//! ```
+//!
+//! with SS the held-out sum of squares over its n terms: the Gaussian
+//! log-likelihood gain (σ known, or profiled out) less the BIC penalty.
+//! Scoring on held-out data already punishes over-fitting; the penalty
+//! makes a parameter pay for itself on top, so pure noise never earns an
+//! effect. **Forward selection** adds the candidate with the largest Δ,
+//! refits all parameters of the grown set jointly, and repeats while the
+//! best Δ is positive, up to a maximum number of effects. The answer is
+//! `none` when no candidate has Δ > 0 at the first step.
+
+use crate::holdout::{HoldOut, TooShort};
+use crate::locate::{locate, Location};
+use crate::model::{Applied, Hints, Model, ModelError, Series};
+use crate::optimize::{minimize, Budget};
+use crate::residual::{gap, scaled, sum_of_squares};
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+
+/// One side of a problem: a model with its data and the samples used.
+pub struct Part<'a> {
+    /// The model and its data.
+    pub model: &'a dyn Model,
+    /// `true` for the samples this side uses.
+    pub mask: Vec<bool>,
+}
+
+/// What is fitted on and what is scored on.
+pub struct Problem<'a> {
+    /// Samples the fits see.
+    pub fit: Part<'a>,
+    /// Samples held out from the fits, on which everything is scored.
+    pub held: Part<'a>,
+}
+
+impl<'a> Problem<'a> {
+    /// One log split into alternating fit and held-out blocks.
+    ///
+    /// # Errors
+    /// [`TooShort`] when the log cannot hold anything out.
+    pub fn split(model: &'a dyn Model, hold_out: HoldOut) -> Result<Self, TooShort> {
+        let masks = hold_out.split(model.times())?;
+        Ok(Self {
+            fit: Part {
+                model,
+                mask: masks.fit,
+            },
+            held: Part {
+                model,
+                mask: masks.held,
+            },
+        })
+    }
+
+    /// A fit run and a separate held-out run of the same system, each
+    /// used whole.
+    pub fn two_runs(fit: &'a dyn Model, held: &'a dyn Model) -> Self {
+        Self {
+            fit: Part {
+                model: fit,
+                mask: vec![true; fit.times().len()],
+            },
+            held: Part {
+                model: held,
+                mask: vec![true; held.times().len()],
+            },
+        }
+    }
+}
+
+/// How the engine works.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Options {
+    /// Minimisation budget per fit.
+    pub budget: Budget,
+    /// Worker threads fitting candidates side by side (at least 1).
+    pub threads: usize,
+    /// Most effects forward selection adds.
+    pub max_effects: usize,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self {
+            budget: Budget::default(),
+            threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
+            max_effects: 1,
+        }
+    }
+}
+
+/// Progress of a diagnosis: a candidate fit finished.
+#[derive(Clone, Copy, Debug)]
+pub struct Progress<'a> {
+    /// Fits finished in this selection step.
+    pub done: usize,
+    /// Fits in this selection step.
+    pub total: usize,
+    /// The candidate just fitted.
+    pub candidate: &'a str,
+}
+
+/// One candidate effect fitted and scored.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Ranked {
+    /// Its name.
+    pub effect: String,
+    /// Share of the held-out gap it explains: 1 − after / before.
+    pub score: f64,
+    /// Held-out information criterion Δ (positive: the effect is real).
+    pub criterion: f64,
+    /// Fitted parameters, SI units (see `units`).
+    pub params: BTreeMap<String, f64>,
+    /// Unit of each parameter.
+    pub units: BTreeMap<String, String>,
+    /// Held-out gap with the effect added (after the effects chosen
+    /// before it).
+    pub held_out_after: f64,
+}
+
+/// The gap before and after the chosen effects, on held-out data.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Gap {
+    /// What `before` and `after` measure.
+    pub metric: String,
+    /// Held-out gap of the nominal sim.
+    pub before: f64,
+    /// Held-out gap with the chosen effects.
+    pub after: f64,
+    /// 1 − after / before (0 when there is no gap).
+    pub shrink: f64,
+    /// Always `true`: both are measured on data the fits never saw.
+    pub held_out: bool,
+}
+
+/// One step of forward selection: every remaining candidate, best first.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Step {
+    /// The candidates fitted at this step, best criterion first.
+    pub ranking: Vec<Ranked>,
+    /// The one added, if any earned its parameters.
+    pub added: Option<String>,
+}
+
+/// The engine's answer.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Selection {
+    /// The effects added, in order, each with its parameters as refitted
+    /// with all effects added (the last step's values).
+    pub effects: Vec<Ranked>,
+    /// Every selection step.
+    pub steps: Vec<Step>,
+    /// The nominal sim's own fitted parameters (see [`Model::base`]).
+    pub nominal: BTreeMap<String, f64>,
+    /// Where the nominal sim's gap lies (held-out side, all its samples).
+    pub location: Location,
+    /// Where what the chosen effects leave lies.
+    pub remaining: Location,
+    /// The held-out gap before and after.
+    pub gap: Gap,
+    /// The chosen effects' predictions on the held-out side.
+    #[serde(skip)]
+    pub predictions: Predictions,
+    /// Cost evaluations (simulations) spent.
+    pub evaluations: usize,
+}
+
+/// Predictions kept for plotting: the held-out side's nominal sim and
+/// the sim with the chosen effects.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Predictions {
+    /// Nominal sim.
+    pub nominal: Option<Series>,
+    /// Sim with the chosen effects.
+    pub chosen: Option<Series>,
+}
+
+/// Why a diagnosis could not be made.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum EngineError {
+    /// The nominal sim could not be computed.
+    #[error("the nominal sim failed: {0}")]
+    Nominal(ModelError),
+    /// The fit and held-out models do not describe the same signals or
+    /// candidates.
+    #[error("the fit and held-out data differ in {0}")]
+    Mismatch(&'static str),
+}
+
+/// A set of effects fitted on one side and scored on the other.
+#[derive(Clone, Debug)]
+struct Fitted {
+    effects: Vec<Applied>,
+    held_sum: f64,
+    evaluations: usize,
+}
+
+fn criterion(reference: f64, sum: f64, terms: usize, parameters: usize, floor: f64) -> f64 {
+    let n = terms.max(1) as f64;
+    let gain = if floor > 0.0 {
+        (reference - sum) / floor
+    } else if sum > 0.0 && reference > 0.0 {
+        n * (reference / sum).ln()
+    } else {
+        0.0
+    };
+    if gain.is_finite() {
+        gain - parameters as f64 * n.ln()
+    } else {
+        f64::NEG_INFINITY
+    }
+}
+
+/// Maps unit coordinates to effects: `base` with its parameters replaced
+/// by the first units, then `candidate` (if any) with the rest.
+fn effects_at(model: &dyn Model, layout: &[usize], units: &[f64]) -> Vec<Applied> {
+    let mut rest = units;
+    layout
+        .iter()
+        .map(|&candidate| {
+            let parameters = &model.candidates()[candidate].parameters;
+            let (mine, others) = rest.split_at(parameters.len().min(rest.len()));
+            rest = others;
+            Applied {
+                candidate,
+                values: parameters
+                    .iter()
+                    .zip(mine)
+                    .map(|(p, u)| p.value(*u))
+                    .collect(),
+            }
+        })
+        .collect()
+}
+
+fn fit(
+    problem: &Problem,
+    base: &[Applied],
+    candidate: usize,
+    hints: &Hints,
+    options: &Options,
+) -> Fitted {
+    let model = problem.fit.model;
+    let candidates = model.candidates();
+    let base_units: Vec<f64> = base
+        .iter()
+        .flat_map(|a| {
+            candidates[a.candidate]
+                .parameters
+                .iter()
+                .zip(&a.values)
+                .map(|(p, v)| p.unit_of(*v))
+        })
+        .collect();
+    let layout: Vec<usize> = base
+        .iter()
+        .map(|a| a.candidate)
+        .chain(std::iter::once(candidate))
+        .collect();
+    let starts: Vec<Vec<f64>> = model
+        .starts(candidate, hints)
+        .into_iter()
+        .map(|s| base_units.iter().copied().chain(s).collect())
+        .collect();
+    let cost = |units: &[f64]| match model.predict(&effects_at(model, &layout, units)) {
+        Ok(predicted) => sum_of_squares(model, &predicted, &problem.fit.mask).0,
+        Err(_) => f64::INFINITY,
+    };
+    let minimum = minimize(cost, &starts, options.budget);
+    let effects = effects_at(model, &layout, &minimum.point);
+    let held_sum = held_sum(problem, &effects).unwrap_or(f64::INFINITY);
+    Fitted {
+        effects,
+        held_sum,
+        evaluations: minimum.evaluations + 1,
+    }
+}
+
+fn held_sum(problem: &Problem, effects: &[Applied]) -> Result<f64, ModelError> {
+    let predicted = problem.held.model.predict(effects)?;
+    Ok(sum_of_squares(problem.held.model, &predicted, &problem.held.mask).0)
+}
+
+/// `f(0..count)` on `threads` workers; results in index order.
+fn parallel_map<T: Send>(count: usize, threads: usize, f: impl Fn(usize) -> T + Sync) -> Vec<T> {
+    let next = AtomicUsize::new(0);
+    let results: Mutex<Vec<Option<T>>> = Mutex::new((0..count).map(|_| None).collect());
+    std::thread::scope(|scope| {
+        for _ in 0..threads.clamp(1, count.max(1)) {
+            scope.spawn(|| loop {
+                let index = next.fetch_add(1, Ordering::Relaxed);
+                if index >= count {
+                    break;
+                }
+                let value = f(index);
+                if let Ok(mut slots) = results.lock() {
+                    slots[index] = Some(value);
+                }
+            });
+        }
+    });
+    results
+        .into_inner()
+        .unwrap_or_default()
+        .into_iter()
+        .flatten()
+        .collect()
+}
+
+fn check_alike(problem: &Problem) -> Result<(), EngineError> {
+    let (a, b) = (problem.fit.model, problem.held.model);
+    if a.signals() != b.signals() || a.scales().len() != b.scales().len() {
+        return Err(EngineError::Mismatch("signals"));
+    }
+    if a.candidates() != b.candidates() {
+        return Err(EngineError::Mismatch("candidates"));
+    }
+    Ok(())
+}
+
+/// Diagnoses `problem`: ranks every candidate and adds effects by forward
+/// selection (see the module docs). `progress` is told of every finished
+/// fit.
+///
+/// # Errors
+/// The nominal sim fails, or the two sides are not the same system.
+pub fn select(
+    problem: &Problem,
+    options: &Options,
+    progress: &(dyn Fn(Progress) + Sync),
+) -> Result<Selection, EngineError> {
+    check_alike(problem)?;
+    let held = problem.held.model;
+    let floor = held.noise_floor();
+    let candidates = problem.fit.model.candidates();
+    let mut evaluations = 1usize;
+    // The nominal sim: with its own parameters fitted, where it has any.
+    let mut chosen: Vec<Applied> = Vec::new();
+    if let Some(base) = problem.fit.model.base() {
+        let fitted = fit(problem, &[], base, &Hints::default(), options);
+        evaluations += fitted.evaluations;
+        chosen = fitted.effects;
+    }
+    let nominal_effects = chosen.clone();
+    let nominal = held.predict(&chosen).map_err(EngineError::Nominal)?;
+    let (nominal_sum, terms) = sum_of_squares(held, &nominal, &problem.held.mask);
+    let (location, hints) = locate(held, &scaled(held, &nominal));
+    let gap_of = |sum: f64| gap(sum / terms.max(1) as f64, floor);
+    let before = gap_of(nominal_sum);
+    let share = |after: f64| {
+        if before > 0.0 {
+            1.0 - after / before
+        } else {
+            0.0
+        }
+    };
+    let mut current = nominal_sum;
+    let mut steps = Vec::new();
+    for _ in 0..options.max_effects.min(candidates.len()) {
+        let remaining: Vec<usize> = (0..candidates.len())
+            .filter(|c| chosen.iter().all(|a| a.candidate != *c))
+            .collect();
+        if remaining.is_empty() {
+            break;
+        }
+        let done = AtomicUsize::new(0);
+        let fits = parallel_map(remaining.len(), options.threads, |i| {
+            let fitted = fit(problem, &chosen, remaining[i], &hints, options);
+            progress(Progress {
+                done: done.fetch_add(1, Ordering::Relaxed) + 1,
+                total: remaining.len(),
+                candidate: candidates[remaining[i]].name,
+            });
+            fitted
+        });
+        evaluations += fits.iter().map(|f| f.evaluations).sum::<usize>();
+        let mut ranked: Vec<(Ranked, &Fitted)> = fits
+            .iter()
+            .map(|f| {
+                let mine = f.effects.last().cloned().unwrap_or(Applied {
+                    candidate: 0,
+                    values: Vec::new(),
+                });
+                let parameters = &candidates[mine.candidate].parameters;
+                let after = gap_of(f.held_sum);
+                (
+                    Ranked {
+                        effect: candidates[mine.candidate].name.to_string(),
+                        score: share(after),
+                        criterion: criterion(current, f.held_sum, terms, parameters.len(), floor),
+                        params: parameters
+                            .iter()
+                            .zip(&mine.values)
+                            .map(|(p, v)| (p.name.to_string(), *v))
+                            .collect(),
+                        units: parameters
+                            .iter()
+                            .map(|p| (p.name.to_string(), p.unit.to_string()))
+                            .collect(),
+                        held_out_after: after,
+                    },
+                    f,
+                )
+            })
+            .collect();
+        ranked.sort_by(|a, b| b.0.criterion.total_cmp(&a.0.criterion));
+        let winner = ranked
+            .first()
+            .filter(|(r, _)| r.criterion > 0.0)
+            .map(|(r, f)| (r.effect.clone(), (*f).clone()));
+        steps.push(Step {
+            ranking: ranked.iter().map(|(r, _)| r.clone()).collect(),
+            added: winner.as_ref().map(|w| w.0.clone()),
+        });
+        let Some((_, fitted)) = winner else { break };
+        chosen = fitted.effects;
+        current = fitted.held_sum;
+    }
+    let chosen_prediction = if chosen == nominal_effects {
+        nominal.clone()
+    } else {
+        held.predict(&chosen).map_err(EngineError::Nominal)?
+    };
+    let (remaining, _) = locate(held, &scaled(held, &chosen_prediction));
+    let after = gap_of(current);
+    let base = nominal_effects.len();
+    let effects = chosen
+        .iter()
+        .skip(base)
+        .enumerate()
+        .map(|(i, a)| {
+            let parameters = &candidates[a.candidate].parameters;
+            let mut ranked = steps[i]
+                .ranking
+                .iter()
+                .find(|r| r.effect == candidates[a.candidate].name)
+                .cloned()
+                .unwrap_or_else(|| Ranked {
+                    effect: candidates[a.candidate].name.to_string(),
+                    score: 0.0,
+                    criterion: 0.0,
+                    params: BTreeMap::new(),
+                    units: BTreeMap::new(),
+                    held_out_after: after,
+                });
+            ranked.params = parameters
+                .iter()
+                .zip(&a.values)
+                .map(|(p, v)| (p.name.to_string(), *v))
+                .collect();
+            ranked
+        })
+        .collect();
+    let nominal_parameters = nominal_effects
+        .first()
+        .map(|a| {
+            candidates[a.candidate]
+                .parameters
+                .iter()
+                .zip(&a.values)
+                .map(|(p, v)| (p.name.to_string(), *v))
+                .collect()
+        })
+        .unwrap_or_default();
+    Ok(Selection {
+        effects,
+        nominal: nominal_parameters,
+        steps,
+        location,
+        remaining,
+        gap: Gap {
+            metric: held.gap_metric().to_string(),
+            before,
+            after,
+            shrink: share(after),
+            held_out: true,
+        },
+        predictions: Predictions {
+            nominal: Some(nominal),
+            chosen: Some(chosen_prediction),
+        },
+        evaluations,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::criterion;
+
+    #[test]
+    fn criterion_charges_each_parameter_ln_n() {
+        // Known noise: a gain of exactly k ln n is worth nothing.
+        let n = 1000usize;
+        let c = criterion(2000.0, 2000.0 - 2.0 * (n as f64).ln(), n, 2, 1.0);
+        assert!(c.abs() < 1e-9);
+        // Unknown noise: halving the residual is worth n ln 2 − k ln n.
+        let c = criterion(2.0, 1.0, n, 1, 0.0);
+        assert!((c - (n as f64 * 2f64.ln() - (n as f64).ln())).abs() < 1e-9);
+        assert_eq!(criterion(1.0, f64::INFINITY, n, 1, 1.0), f64::NEG_INFINITY);
+    }
+}

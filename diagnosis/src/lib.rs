@@ -1,0 +1,36 @@
+//! # limb-diagnosis: where the sim-to-real gap lies, which unmodelled
+//! effect causes it, and how far it shrinks once that effect is added
+//!
+//! Data flow:
+//!
+//! ```text
+//! real log ──► Model (arm: the reference plant with the log's arm lengths)
+//!                │ predict(effects) → signals at every sample
+//!                ▼
+//! holdout ─► Problem { fit samples, held-out samples }
+//!                ▼
+//! engine::select ─► nominal residual ─► locate (signals, time, band)
+//!                 ─► every candidate: optimize on fit samples,
+//!                    score on held-out samples (information criterion)
+//!                 ─► rank; forward selection while an effect earns its
+//!                    parameters; gap before/after on held-out data
+//!                ▼
+//! arm::diagnose (the `limb diagnose` answer) · selfcheck (blind check)
+//! ```
+//!
+//! [`model`] is the only thing a plant provides; [`engine`], [`optimize`],
+//! [`holdout`], [`residual`] and [`locate`] know nothing of arms.
+
+#![forbid(unsafe_code)]
+
+pub mod arm;
+pub mod engine;
+pub mod holdout;
+pub mod locate;
+pub mod model;
+pub mod optimize;
+pub mod residual;
+
+pub use engine::{select, Options, Problem, Progress, Selection};
+pub use holdout::HoldOut;
+pub use model::{Applied, Candidate, Model, ModelError, Series};
