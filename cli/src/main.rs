@@ -4,6 +4,7 @@
 
 mod arebo;
 mod config;
+mod diagnose;
 mod error;
 mod estimate;
 mod kuka;
@@ -45,6 +46,8 @@ enum Command {
     },
     /// Run the reference plant (optionally with unmodelled effects) and write its log.
     Simulate(simulate::SimulateArgs),
+    /// Diagnose the sim-to-real gap of a log: where, which effect, how far it shrinks.
+    Diagnose(diagnose::DiagnoseArgs),
     /// Supervise a kernel over Zenoh: run a node, send commands, query.
     Zenoh(zenoh::ZenohArgs),
     /// AREBO adapter: calibrate or run a device, or simulate one.
@@ -80,6 +83,7 @@ fn main() {
             Some(sub) => simulate::run(&args, sub),
             None => Err(CliError::Internal("simulate: no argument matches".into())),
         },
+        Command::Diagnose(args) => diagnose::run(&args),
         Command::Zenoh(args) => zenoh::run(args),
         Command::Arebo { command } => arebo::run(command),
         Command::Kuka(command) => kuka::run(command),

@@ -489,16 +489,33 @@ impl Model for ArmModel {
         };
         let measurement_side = MEASUREMENT_SIDE.contains(&c.name);
         match (c.name, c.parameters.as_slice()) {
-            ("active_torque", [amp, freq]) => match hints.frequency {
-                Some(f) => [0.98, 1.0, 1.02]
-                    .iter()
-                    .flat_map(|scale| {
-                        let fu = freq.unit_of(f * scale);
-                        [0.05, 0.2, 1.0].map(|a| vec![amp.unit_of(a), fu])
+            ("active_torque", [amp, freq]) => {
+                // The cost is periodic-multimodal in the frequency: start
+                // at the residual's spectral peak (when one stands out) and
+                // on a log-spaced comb wide enough to catch a torque whose
+                // response is not a clean band.
+                let mut starts: Vec<Vec<f64>> = hints
+                    .frequency
+                    .map(|f| {
+                        // The interpolated peak is good to a fraction of
+                        // 1/duration; the phase over the whole log needs
+                        // better, so seven starts ±0.12 % around it.
+                        (-3..=3)
+                            .flat_map(|k| {
+                                let fu = freq.unit_of(f * (1.0 + 0.0004 * f64::from(k)));
+                                [0.1, 0.4, 1.5].map(|a| vec![amp.unit_of(a), fu])
+                            })
+                            .collect()
                     })
-                    .collect(),
-                None => grid(2, 5),
-            },
+                    .unwrap_or_default();
+                for k in 0..12 {
+                    let f = 0.1 * 50f64.powf(k as f64 / 11.0);
+                    for a in [0.1, 0.6] {
+                        starts.push(vec![amp.unit_of(a), freq.unit_of(f)]);
+                    }
+                }
+                starts
+            }
             ("grasp_slip", [shift, at]) => match hints.onset {
                 Some(onset) => [0.0, 0.15, 0.3]
                     .iter()

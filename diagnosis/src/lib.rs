@@ -15,7 +15,7 @@
 //!                 ─► rank; forward selection while an effect earns its
 //!                    parameters; gap before/after on held-out data
 //!                ▼
-//! arm::diagnose (the `limb diagnose` answer) · selfcheck (blind check)
+//! verdict::diagnose (the `limb diagnose` answer) · selfcheck (blind check)
 //! ```
 //!
 //! [`model`] is the only thing a plant provides; [`engine`], [`optimize`],
@@ -29,7 +29,10 @@ pub mod holdout;
 pub mod locate;
 pub mod model;
 pub mod optimize;
+pub mod report;
 pub mod residual;
+pub mod selfcheck;
+pub mod verdict;
 
 pub use engine::{select, Options, Problem, Progress, Selection};
 pub use holdout::HoldOut;

@@ -17,7 +17,11 @@
 //!   above [`LOWEST_BAND`] Hz (slower is the motion itself), the bins
 //!   around the peak that stay above a quarter of it form the band. It is
 //!   reported when it holds at least [`BAND_SHARE`] of the residual's
-//!   power and its peak stands 10× above the median bin.
+//!   power and its peak stands 10× above the median bin. The signal is
+//!   zero-padded to [`PADDING`]× its length and the peak interpolated
+//!   (parabola through the log power of the peak bin and its neighbours),
+//!   so the peak frequency — the start of a periodic effect's fit — is
+//!   far finer than 1 / duration.
 
 use crate::model::{Hints, Model, Series};
 use rustfft::{num_complex::Complex, FftPlanner};
@@ -29,6 +33,8 @@ pub const SIGNIFICANCE: f64 = 5.0;
 pub const WINDOW: f64 = 0.5;
 /// Slowest frequency a band may start at [Hz].
 pub const LOWEST_BAND: f64 = 0.15;
+/// Zero-padding factor of the periodogram.
+pub const PADDING: usize = 8;
 /// Share of the residual's power a band must hold to be reported.
 pub const BAND_SHARE: f64 = 0.3;
 
@@ -149,6 +155,7 @@ fn band(signal: &[f64], interval: f64) -> Option<(f64, [f64; 2], f64)> {
         return None;
     }
     let mean = signal.iter().sum::<f64>() / n as f64;
+    let padded = n * PADDING;
     let mut buffer: Vec<Complex<f64>> = signal
         .iter()
         .enumerate()
@@ -156,13 +163,17 @@ fn band(signal: &[f64], interval: f64) -> Option<(f64, [f64; 2], f64)> {
             let w = 0.5 - 0.5 * (2.0 * std::f64::consts::PI * i as f64 / (n - 1) as f64).cos();
             Complex::new((v - mean) * w, 0.0)
         })
+        .chain(std::iter::repeat(Complex::new(0.0, 0.0)))
+        .take(padded)
         .collect();
-    FftPlanner::new().plan_fft_forward(n).process(&mut buffer);
-    let resolution = 1.0 / (n as f64 * interval);
-    let power: Vec<f64> = buffer[..n / 2].iter().map(|c| c.norm_sqr()).collect();
+    FftPlanner::new()
+        .plan_fft_forward(padded)
+        .process(&mut buffer);
+    let resolution = 1.0 / (padded as f64 * interval);
+    let power: Vec<f64> = buffer[..padded / 2].iter().map(|c| c.norm_sqr()).collect();
     let total: f64 = power.iter().skip(1).sum();
     let lowest = ((LOWEST_BAND / resolution).ceil() as usize).max(1);
-    if total <= 0.0 || lowest >= power.len() {
+    if total <= 0.0 || lowest + 1 >= power.len() {
         return None;
     }
     let (peak, peak_power) = power
@@ -181,9 +192,22 @@ fn band(signal: &[f64], interval: f64) -> Option<(f64, [f64; 2], f64)> {
     while hi + 1 < power.len() && power[hi + 1] > peak_power / 4.0 {
         hi += 1;
     }
+    // Parabolic interpolation of the log power around the peak bin.
+    let offset = match (power.get(peak.wrapping_sub(1)), power.get(peak + 1)) {
+        (Some(&left), Some(&right)) if left > 0.0 && right > 0.0 && peak > 0 => {
+            let (a, b, c) = (left.ln(), peak_power.ln(), right.ln());
+            let denominator = a - 2.0 * b + c;
+            if denominator < 0.0 {
+                (0.5 * (a - c) / denominator).clamp(-0.5, 0.5)
+            } else {
+                0.0
+            }
+        }
+        _ => 0.0,
+    };
     let share = power[lo..=hi].iter().sum::<f64>() / total;
     (share >= BAND_SHARE && peak_power > 10.0 * median).then_some((
-        peak as f64 * resolution,
+        (peak as f64 + offset) * resolution,
         [lo as f64 * resolution, hi as f64 * resolution],
         share,
     ))
@@ -200,7 +224,7 @@ mod tests {
             .map(|i| (2.0 * std::f64::consts::PI * 1.3 * i as f64 * interval).sin())
             .collect();
         let (peak, [lo, hi], share) = band(&sine, interval).unwrap();
-        assert!((peak - 1.3).abs() < 0.02 && lo <= 1.3 && 1.3 <= hi && share > 0.8);
+        assert!((peak - 1.3).abs() < 0.002 && lo <= 1.3 && 1.3 <= hi && share > 0.8);
         let drift: Vec<f64> = (0..3000).map(|i| (i as f64 * interval).powi(2)).collect();
         assert!(band(&drift, interval).is_none());
     }

@@ -25,8 +25,8 @@ pub struct Budget {
 impl Default for Budget {
     fn default() -> Self {
         Self {
-            refine: 2,
-            iterations: 30,
+            refine: 1,
+            iterations: 40,
             step_per_mille: 80,
         }
     }
@@ -34,7 +34,7 @@ impl Default for Budget {
 
 /// Nelder–Mead runs per refined start, each with a simplex a quarter the
 /// size of the one before and a share of the iterations.
-const RESTARTS: usize = 3;
+const RESTARTS: usize = 5;
 
 /// The best point found and its cost.
 #[derive(Clone, Debug, PartialEq)]
@@ -68,10 +68,14 @@ pub fn minimize(cost: impl Fn(&[f64]) -> f64, starts: &[Vec<f64>], budget: Budge
             .sum::<f64>()
             .sqrt();
         let c = cost(&inside);
-        if c.is_nan() {
+        if !c.is_finite() {
+            // NaN (and the NaN an infinite cost times a zero distance
+            // would make) sorts as the worst point, never the best.
             f64::INFINITY
-        } else {
+        } else if outside > 0.0 {
             c + (c.abs() + 1.0) * 10.0 * outside
+        } else {
+            c
         }
     };
     let mut scored: Vec<(f64, Vec<f64>)> = starts
@@ -193,6 +197,21 @@ mod tests {
             prop_assert!(m.point.iter().all(|u| (0.0..=1.0).contains(u)));
             prop_assert!((m.point[0] - a).abs() < 1e-3 && (m.point[1] - b).abs() < 1e-3, "{:?}", m.point);
         }
+    }
+
+    /// An infinite cost at the first start (a diverged simulation) must
+    /// not be taken for the best point.
+    #[test]
+    fn infinite_costs_rank_last() {
+        let cost = |p: &[f64]| {
+            if p[0] < 0.1 {
+                f64::INFINITY
+            } else {
+                (p[0] - 0.3).powi(2)
+            }
+        };
+        let m = minimize(cost, &grid(1, 9), Budget::default());
+        assert!((m.point[0] - 0.3).abs() < 0.01, "{:?}", m.point);
     }
 
     #[test]

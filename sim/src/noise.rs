@@ -23,7 +23,8 @@ impl Gaussian {
         }
     }
 
-    fn uniform(&mut self) -> f64 {
+    /// One uniform draw in (0, 1] (the stream [`Gaussian::sample`] uses).
+    pub fn uniform(&mut self) -> f64 {
         let mut x = self.state;
         x ^= x >> 12;
         x ^= x << 25;

@@ -1,0 +1,208 @@
+//! `limb diagnose LOG.csv --l1 M --l2 M [--json] [--report FILE.html]`
+//! and `limb diagnose --self-check N [--seed S] [--json]`
+//! (`../shared/spec/cli.md`): where the sim-to-real gap lies, which
+//! unmodelled effect causes it, how far it shrinks on held-out data.
+//! The engine is `limb-diagnosis`; this module parses, reports progress
+//! on a terminal and prints.
+
+use crate::error::{emit, print_json, CliError};
+use indicatif::{ProgressBar, ProgressStyle};
+use limb_diagnosis::selfcheck::{self, Summary};
+use limb_diagnosis::verdict::{diagnose, Diagnosis};
+use limb_diagnosis::Progress;
+use std::io::IsTerminal;
+use std::path::PathBuf;
+
+/// Arguments of `limb diagnose`.
+#[derive(clap::Args, Debug)]
+pub struct DiagnoseArgs {
+    /// The "real" log (plant.md format; ground-truth columns are ignored).
+    #[arg(required_unless_present = "self_check")]
+    log: Option<PathBuf>,
+    /// Upper-arm length of the sim [m].
+    #[arg(long, required_unless_present = "self_check")]
+    l1: Option<f64>,
+    /// Forearm length of the sim [m].
+    #[arg(long, required_unless_present = "self_check")]
+    l2: Option<f64>,
+    /// Print one JSON object on stdout.
+    #[arg(long)]
+    json: bool,
+    /// Write a self-contained HTML report here.
+    #[arg(long, value_name = "FILE.html")]
+    report: Option<PathBuf>,
+    /// Blind self-check over N generated logs with withheld effects.
+    #[arg(long, value_name = "N", conflicts_with_all = ["log", "l1", "l2", "report"])]
+    self_check: Option<usize>,
+    /// Seed of the self-check's draws.
+    #[arg(long, default_value_t = 1, requires = "self_check")]
+    seed: u64,
+    /// Worker threads fitting candidates side by side (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+}
+
+fn bar(length: usize, unit: &str) -> Option<ProgressBar> {
+    if !std::io::stderr().is_terminal() {
+        return None;
+    }
+    let bar = ProgressBar::new(length as u64);
+    let style = ProgressStyle::with_template(&format!(
+        "{{spinner}} {{bar:30}} {{pos}}/{{len}} {unit} {{msg}} [{{elapsed}}]"
+    ))
+    .unwrap_or_else(|_| ProgressStyle::default_bar());
+    bar.set_style(style);
+    Some(bar)
+}
+
+/// Runs `limb diagnose`.
+///
+/// # Errors
+/// [`CliError::BadInput`] for an unreadable or malformed log, bad arm
+/// lengths, a log too short to hold data out or whose commanded motion is
+/// not the sim's; [`CliError::Internal`] when the sim fails.
+pub fn run(args: &DiagnoseArgs) -> Result<(), CliError> {
+    let threads = match args.threads {
+        Some(0) => return Err(CliError::BadInput("--threads must be at least 1".into())),
+        Some(n) => n,
+        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+    };
+    if let Some(logs) = args.self_check {
+        return self_check(logs, args.seed, threads, args.json);
+    }
+    let (Some(log), Some(l1), Some(l2)) = (&args.log, args.l1, args.l2) else {
+        return Err(CliError::BadInput(
+            "diagnose needs LOG, --l1 and --l2".into(),
+        ));
+    };
+    let records =
+        limb_sim::log::read(log).map_err(|error| CliError::BadInput(error.to_string()))?;
+    let progress = bar(
+        limb_diagnosis::arm::candidates(0.0).len(),
+        "candidates fitted",
+    );
+    let tell = |p: Progress| {
+        if let Some(bar) = &progress {
+            bar.set_position(p.done as u64);
+            bar.set_message(p.candidate.to_string());
+        }
+    };
+    let diagnosed = diagnose(l1, l2, &records, threads, &tell).map_err(|error| {
+        use limb_diagnosis::verdict::DiagnoseError as E;
+        let text = format!("{}: {error}", log.display());
+        match error {
+            E::Engine(_) | E::SelfCheck(_) => CliError::Internal(text),
+            E::Arm(limb_diagnosis::arm::ArmError::Sim(_)) => CliError::Internal(text),
+            E::Arm(_) | E::TooShort(_) => CliError::BadInput(text),
+        }
+    })?;
+    if let Some(bar) = progress {
+        bar.finish_and_clear();
+    }
+    if let Some(path) = &args.report {
+        let page = limb_diagnosis::report::page(&diagnosed, &log.display().to_string());
+        std::fs::write(path, page).map_err(|error| {
+            CliError::BadInput(format!(
+                "{}: cannot write the report: {error}",
+                path.display()
+            ))
+        })?;
+    }
+    if args.json {
+        return print_json(&diagnosed.diagnosis);
+    }
+    emit(&human(&diagnosed.diagnosis))
+}
+
+fn human(d: &Diagnosis) -> String {
+    let mut text = format!("effect   {}\n", d.effect);
+    let g = &d.gap;
+    text += &format!(
+        "gap      {:.3} -> {:.3} ({}; shrink {:.1} %, held out: {})\n",
+        g.before,
+        g.after,
+        g.metric,
+        100.0 * g.shrink,
+        d.held_out
+    );
+    let l = &d.location;
+    text += &match (l.t_start, l.t_end) {
+        (Some(a), Some(b)) => format!(
+            "where    {} from {a:.2} s to {b:.2} s",
+            l.signals.join(", ")
+        ),
+        _ => "where    nowhere beyond the noise".to_string(),
+    };
+    if let Some([lo, hi]) = l.band_hz {
+        text += &format!(", band {lo:.2}-{hi:.2} Hz");
+    }
+    text += "\nranking  (held-out criterion, share of the gap explained, fitted parameters)\n";
+    for r in &d.ranking {
+        let params: Vec<String> = r
+            .params
+            .iter()
+            .map(|(k, v)| format!("{k} = {v:.4} {}", r.units.get(k).map_or("", String::as_str)))
+            .collect();
+        text += &format!(
+            "  {:<17} {:>12.1} {:>7.1} %  {}\n",
+            r.effect,
+            r.criterion,
+            100.0 * r.score,
+            params.join(", ")
+        );
+    }
+    text
+}
+
+fn self_check(logs: usize, seed: u64, threads: usize, json: bool) -> Result<(), CliError> {
+    if logs == 0 {
+        return Err(CliError::BadInput(
+            "--self-check needs at least one log".into(),
+        ));
+    }
+    let progress = bar(logs, "logs diagnosed");
+    let summary = selfcheck::run(logs, seed, threads, &|case| {
+        if let Some(bar) = &progress {
+            bar.inc(1);
+            bar.set_message(format!("{} -> {}", case.truth, case.answer));
+        }
+    })
+    .map_err(|error| CliError::Internal(error.to_string()))?;
+    if let Some(bar) = progress {
+        bar.finish_and_clear();
+    }
+    if json {
+        return print_json(&summary);
+    }
+    emit(&confusion(&summary))
+}
+
+fn confusion(s: &Summary) -> String {
+    let short = |name: &str| name.chars().take(6).collect::<String>();
+    let mut text = format!(
+        "blind self-check: {} logs, seed {}\nrows: withheld effect; columns: answer\n{:>17}",
+        s.logs, s.seed, ""
+    );
+    for name in &s.classes {
+        text += &format!(" {:>6}", short(name));
+    }
+    text += "\n";
+    for (name, row) in s.classes.iter().zip(&s.confusion) {
+        text += &format!("{name:>17}");
+        for count in row {
+            text += &format!(" {count:>6}");
+        }
+        text += "\n";
+    }
+    text += &format!(
+        "top-1 accuracy {:.1} %\nmedian held-out shrink when right {:.1} %\n\
+         median relative parameter error when right {:.1} %\n\
+         none answered for effects > 2x noise: {} of {}\n",
+        100.0 * s.top1_accuracy,
+        100.0 * s.median_shrink,
+        100.0 * s.median_parameter_error,
+        s.none_for_large_effects,
+        s.large_effects
+    );
+    text
+}

@@ -1,0 +1,291 @@
+//! The `--report FILE.html` page: one self-contained HTML file (inline
+//! SVG, no scripts, no external resources) a person opens in a browser.
+//!
+//! It shows the answer and the held-out gap, then for every signal that
+//! carries the gap (all signals when none does): the real data against
+//! the nominal sim and the sim with the chosen effect, and the scaled
+//! residual of both over time with the localised window shaded; last the
+//! ranking of every candidate.
+//!
+//! The SVG is written here rather than by a plotting crate: the page then
+//! needs no font files at build or run time and is byte-for-byte
+//! reproducible. Long series are thinned to at most [`POINTS`] points per
+//! line (every k-th sample).
+
+use crate::model::{Model, Series};
+use crate::residual::scaled;
+use crate::verdict::Diagnosed;
+use std::fmt::Write;
+
+/// Most points drawn per line.
+pub const POINTS: usize = 1200;
+const WIDTH: f64 = 900.0;
+const HEIGHT: f64 = 220.0;
+const MARGIN: (f64, f64, f64, f64) = (70.0, 20.0, 28.0, 34.0); // left, right, top, bottom
+
+/// Escapes text for HTML and SVG.
+fn escape(text: &str) -> String {
+    text.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// One line of a chart.
+struct Line<'a> {
+    label: &'a str,
+    colour: &'a str,
+    values: Vec<f64>,
+}
+
+/// A "nice" tick step for a span.
+fn tick_step(span: f64) -> f64 {
+    let raw = span / 5.0;
+    let power = 10f64.powf(raw.log10().floor());
+    let fraction = raw / power;
+    let nice = if fraction < 1.5 {
+        1.0
+    } else if fraction < 3.5 {
+        2.0
+    } else if fraction < 7.5 {
+        5.0
+    } else {
+        10.0
+    };
+    nice * power
+}
+
+/// An SVG line chart of `lines` against `times`, `shade` [s] shaded.
+fn chart(
+    title: &str,
+    unit: &str,
+    times: &[f64],
+    lines: &[Line],
+    shade: Option<(f64, f64)>,
+) -> String {
+    let finite = |v: &&f64| v.is_finite();
+    let (t0, t1) = (
+        times.first().copied().unwrap_or(0.0),
+        times.last().copied().unwrap_or(1.0),
+    );
+    let all = lines.iter().flat_map(|l| l.values.iter()).filter(finite);
+    let (mut lo, mut hi) = all.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+        (a.min(*v), b.max(*v))
+    });
+    if !(lo.is_finite() && hi.is_finite()) {
+        (lo, hi) = (0.0, 1.0);
+    }
+    if hi - lo < 1e-12 {
+        (lo, hi) = (lo - 0.5, hi + 0.5);
+    }
+    let (left, right, top, bottom) = MARGIN;
+    let x = |t: f64| left + (t - t0) / (t1 - t0).max(1e-12) * (WIDTH - left - right);
+    let y = |v: f64| top + (hi - v) / (hi - lo) * (HEIGHT - top - bottom);
+    let mut svg = format!(
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{WIDTH}" height="{HEIGHT}" viewBox="0 0 {WIDTH} {HEIGHT}" font-family="sans-serif" font-size="11">"#
+    );
+    let _ = write!(
+        svg,
+        r#"<text x="{left}" y="16" font-weight="bold">{}</text>"#,
+        escape(title)
+    );
+    if let Some((a, b)) = shade {
+        let _ = write!(
+            svg,
+            "<rect x=\"{:.1}\" y=\"{top}\" width=\"{:.1}\" height=\"{:.1}\" fill=\"#fde7c8\"/>",
+            x(a),
+            (x(b) - x(a)).max(1.0),
+            HEIGHT - top - bottom
+        );
+    }
+    let _ = write!(
+        svg,
+        r##"<rect x="{left}" y="{top}" width="{:.1}" height="{:.1}" fill="none" stroke="#888"/>"##,
+        WIDTH - left - right,
+        HEIGHT - top - bottom
+    );
+    let step = tick_step(hi - lo);
+    let mut v = (lo / step).ceil() * step;
+    while v <= hi {
+        let _ = write!(
+            svg,
+            r##"<text x="{:.1}" y="{:.1}" text-anchor="end">{}</text><line x1="{left}" x2="{:.1}" y1="{:.1}" y2="{:.1}" stroke="#eee"/>"##,
+            left - 4.0,
+            y(v) + 4.0,
+            format_tick(v, step),
+            WIDTH - right,
+            y(v),
+            y(v)
+        );
+        v += step;
+    }
+    let step = tick_step(t1 - t0);
+    let mut t = (t0 / step).ceil() * step;
+    while t <= t1 {
+        let _ = write!(
+            svg,
+            r#"<text x="{:.1}" y="{:.1}" text-anchor="middle">{}</text>"#,
+            x(t),
+            HEIGHT - bottom + 14.0,
+            format_tick(t, step)
+        );
+        t += step;
+    }
+    let _ = write!(
+        svg,
+        r#"<text x="{:.1}" y="{:.1}" text-anchor="end">t [s]</text><text x="12" y="{:.1}" transform="rotate(-90 12 {:.1})" text-anchor="middle">{}</text>"#,
+        WIDTH - right,
+        HEIGHT - 4.0,
+        HEIGHT / 2.0,
+        HEIGHT / 2.0,
+        escape(unit)
+    );
+    let stride = times.len().div_ceil(POINTS).max(1);
+    for (i, line) in lines.iter().enumerate() {
+        let points: Vec<String> = times
+            .iter()
+            .zip(&line.values)
+            .step_by(stride)
+            .filter(|(_, v)| v.is_finite())
+            .map(|(t, v)| format!("{:.1},{:.1}", x(*t), y(*v)))
+            .collect();
+        let _ = write!(
+            svg,
+            r#"<polyline fill="none" stroke="{}" stroke-width="1.2" points="{}"/><text x="{:.1}" y="16" fill="{}">{}</text>"#,
+            line.colour,
+            points.join(" "),
+            WIDTH - right - 150.0 * (lines.len() - i) as f64,
+            line.colour,
+            escape(line.label)
+        );
+    }
+    svg + "</svg>"
+}
+
+fn format_tick(value: f64, step: f64) -> String {
+    let decimals = (-step.log10().floor()).max(0.0) as usize;
+    format!("{value:.decimals$}")
+}
+
+/// The report page for a diagnosed log read from `source`.
+pub fn page(diagnosed: &Diagnosed, source: &str) -> String {
+    let model: &dyn Model = &diagnosed.model;
+    let d = &diagnosed.diagnosis;
+    let predictions = &diagnosed.selection.predictions;
+    let empty = Series::with_capacity(model.signals().len(), 0);
+    let nominal = predictions.nominal.as_ref().unwrap_or(&empty);
+    let chosen = predictions.chosen.as_ref().unwrap_or(nominal);
+    let (before, after) = (scaled(model, nominal), scaled(model, chosen));
+    let times = model.times();
+    let shade = d.location.t_start.zip(d.location.t_end);
+    let named: Vec<usize> = if d.location.signals.is_empty() {
+        (0..model.signals().len()).collect()
+    } else {
+        d.location
+            .signals
+            .iter()
+            .filter_map(|n| model.signals().iter().position(|s| s.name == n))
+            .collect()
+    };
+    let mut html = String::from(
+        "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>limb diagnose</title>\
+         <style>body{font-family:sans-serif;max-width:960px;margin:1em auto}\
+         table{border-collapse:collapse}td,th{padding:2px 8px;border-bottom:1px solid #ddd;text-align:right}\
+         td:first-child,th:first-child{text-align:left}</style></head><body>",
+    );
+    let _ = write!(
+        html,
+        "<h1>Sim-to-real gap: {}</h1><p>Log <code>{}</code>. Held out: {}.</p>\
+         <p>Held-out gap ({}) {:.4} &rarr; {:.4}: shrink {:.1} %.</p>",
+        escape(&d.effect),
+        escape(source),
+        escape(&d.held_out),
+        escape(&d.gap.metric),
+        d.gap.before,
+        d.gap.after,
+        100.0 * d.gap.shrink
+    );
+    let _ = write!(
+        html,
+        "<p>Where: {}",
+        match shade {
+            Some((a, b)) => format!(
+                "{} from {a:.2} s to {b:.2} s (shaded)",
+                escape(&d.location.signals.join(", "))
+            ),
+            None => "nowhere beyond the measurement noise".to_string(),
+        }
+    );
+    if let Some([lo, hi]) = d.location.band_hz {
+        let _ = write!(html, "; periodic, {lo:.2}-{hi:.2} Hz");
+    }
+    html += ".</p><h2>Sim against real</h2>";
+    let with = format!("sim + {}", d.effect);
+    for &s in &named {
+        let signal = model.signals()[s];
+        html += &chart(
+            signal.name,
+            signal.unit,
+            times,
+            &[
+                Line {
+                    label: "real",
+                    colour: "#222",
+                    values: model.observed().column(s),
+                },
+                Line {
+                    label: "nominal sim",
+                    colour: "#d62728",
+                    values: nominal.column(s),
+                },
+                Line {
+                    label: &with,
+                    colour: "#1f77b4",
+                    values: chosen.column(s),
+                },
+            ],
+            shade,
+        );
+    }
+    html += "<h2>Residuals over time (real − sim, in units of the noise σ)</h2>";
+    for &s in &named {
+        let signal = model.signals()[s];
+        html += &chart(
+            &format!("{} residual", signal.name),
+            "σ",
+            times,
+            &[
+                Line {
+                    label: "nominal sim",
+                    colour: "#d62728",
+                    values: before.column(s),
+                },
+                Line {
+                    label: &with,
+                    colour: "#1f77b4",
+                    values: after.column(s),
+                },
+            ],
+            shade,
+        );
+    }
+    html += "<h2>Ranking</h2><table><tr><th>effect</th><th>held-out criterion</th>\
+             <th>gap explained</th><th>held-out gap after</th><th>fitted parameters</th></tr>";
+    for r in &d.ranking {
+        let params: Vec<String> = r
+            .params
+            .iter()
+            .map(|(k, v)| format!("{k} = {v:.4} {}", r.units.get(k).map_or("", String::as_str)))
+            .collect();
+        let _ = write!(
+            html,
+            "<tr><td>{}</td><td>{:.1}</td><td>{:.1} %</td><td>{:.4}</td><td>{}</td></tr>",
+            escape(&r.effect),
+            r.criterion,
+            100.0 * r.score,
+            r.held_out_after,
+            escape(&params.join(", "))
+        );
+    }
+    html + "</table></body></html>\n"
+}
