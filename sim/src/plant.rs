@@ -103,6 +103,8 @@ pub struct Plant {
     history: VecDeque<Sensed>,
     /// Shoulder displacement from its rest position (x, z) [m].
     shoulder_offset: Vec2,
+    /// Shoulder velocity (x, z) [m/s] (shoulder drift only).
+    shoulder_velocity: Vec2,
     /// The grasp slip has happened.
     slipped: bool,
 }
@@ -137,6 +139,7 @@ impl Plant {
             follower: 0.0,
             history: VecDeque::new(),
             shoulder_offset: [0.0, 0.0],
+            shoulder_velocity: [0.0, 0.0],
             slipped: false,
         })
     }
@@ -176,11 +179,17 @@ impl Plant {
         let r = &self.params.robot;
         let d = r.damping();
         let mut t = arm_terms(a, q, qd);
+        let mut v = apply(&t.jacobian, qd);
         if self.effects.shoulder_drift.is_some() {
-            t.pose[0] += self.shoulder_offset[0];
-            t.pose[1] += self.shoulder_offset[1];
+            // The whole arm rides on the shoulder: the grasp is displaced
+            // and moves with it (its acceleration is not fed back, see
+            // `effects::shoulder_drift`).
+            let (s, sd) = (self.shoulder_offset, self.shoulder_velocity);
+            t.pose[0] += s[0];
+            t.pose[1] += s[1];
+            v[0] += sd[0];
+            v[1] += sd[1];
         }
-        let v = apply(&t.jacobian, qd);
         let sp = &self.set_point;
         let xd = [sp.pose.x, sp.pose.z, sp.pose.psi];
         let vd = [sp.velocity.x, sp.velocity.z, sp.velocity.psi];
@@ -306,11 +315,17 @@ impl Plant {
             }
         }
         if let (Some(drift), Some(i)) = (self.effects.shoulder_drift, instant) {
-            self.shoulder_offset = if q[0] > 0.0 {
-                drift.displacement([i.wrench[0], i.wrench[1]])
-            } else {
-                [0.0, 0.0]
-            };
+            // While the elbow rests on the table the table holds the arm
+            // and the trunk's state is held; once it is off, the trunk
+            // yields to the robot's force.
+            if q[0] > 0.0 {
+                drift.advance(
+                    [i.wrench[0], i.wrench[1]],
+                    &mut self.shoulder_offset,
+                    &mut self.shoulder_velocity,
+                    STEP,
+                );
+            }
         }
         if let Some(instant) = instant {
             for i in 0..2 {

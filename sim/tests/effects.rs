@@ -136,12 +136,10 @@ fn no_effect_or_a_neutral_one_is_byte_identical_to_nominal() {
 
 /// Allowed RMS difference to a shared log, in noise sigmas per channel
 /// (x, z, psi, y, fx, fz, ty). Noise-level agreement is 1 sigma; rounding
-/// amplifies the noise near quantisation steps; shoulder drift matches only
-/// roughly (see sim/README.md).
+/// amplifies the noise near quantisation steps.
 fn tolerance(file: &str) -> [f64; 7] {
     match file {
         "quantization.csv" => [6.0, 6.0, 4.0, 1.5, 1.5, 1.5, 1.5],
-        "shoulder_drift.csv" => [60.0, 60.0, 6.0, 1.5, 3.0, 3.0, 3.0],
         _ => [1.5; 7],
     }
 }
