@@ -33,7 +33,8 @@ impl Default for Budget {
 }
 
 /// Nelder–Mead runs per refined start, each with a simplex a quarter the
-/// size of the one before and a share of the iterations.
+/// size of the one before: half the iterations to the first, the rest
+/// shared.
 const RESTARTS: usize = 5;
 
 /// The best point found and its cost.
@@ -98,9 +99,14 @@ pub fn minimize(cost: impl Fn(&[f64]) -> f64, starts: &[Vec<f64>], budget: Budge
         // Restarting from the best vertex with a fresh, smaller simplex
         // undoes a simplex that has collapsed (typically against a face).
         let (mut c, mut p) = (*cost0, start.clone());
+        // Half the iterations go to the first (largest) simplex, which
+        // travels; the smaller ones share the rest and polish.
+        let first = budget.iterations / 2;
+        let later = (budget.iterations - first) / (RESTARTS - 1);
         for round in 0..RESTARTS {
             let size = step / f64::from(1u32 << (2 * round));
-            (c, p) = nelder_mead(&mut eval, &p, c, size, budget.iterations / RESTARTS);
+            let iterations = if round == 0 { first } else { later };
+            (c, p) = nelder_mead(&mut eval, &p, c, size, iterations);
         }
         if c < best.0 {
             best = (c, p);

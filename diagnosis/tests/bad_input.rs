@@ -1,0 +1,85 @@
+//! Logs the diagnosis must refuse, with the reason named: too short to
+//! hold anything out, a commanded motion that is not the sim's, no
+//! commanded motion at all, arm lengths that are not lengths.
+
+use limb_diagnosis::arm::ArmError;
+use limb_diagnosis::verdict::{diagnose, DiagnoseError};
+use limb_sim::log::Record;
+
+fn log() -> Vec<Record> {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/noisy/case3.csv");
+    limb_sim::log::read(&path).unwrap()
+}
+
+fn refusal(l1: f64, l2: f64, records: &[Record]) -> DiagnoseError {
+    match diagnose(l1, l2, records, 1, &|_| {}) {
+        Err(error) => error,
+        Ok(d) => panic!("accepted: {:?}", d.diagnosis.effect),
+    }
+}
+
+#[test]
+fn a_log_too_short_to_hold_out_is_refused() {
+    let records: Vec<Record> = log().into_iter().take(300).collect();
+    assert!(matches!(
+        refusal(0.3, 0.2, &records),
+        DiagnoseError::TooShort(_)
+    ));
+}
+
+#[test]
+fn a_different_commanded_motion_is_refused() {
+    let mut records = log();
+    for r in records.iter_mut().skip(1000) {
+        if let Some(c) = r.command.as_mut() {
+            c.z += 0.01;
+        }
+    }
+    match refusal(0.3, 0.2, &records) {
+        DiagnoseError::Arm(ArmError::CommandMismatch { signal, time, .. }) => {
+            assert_eq!(signal, "zd");
+            assert!((time - 10.0).abs() < 1e-9, "{time}");
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn a_log_without_commands_is_refused() {
+    let mut records = log();
+    records[5].command = None;
+    assert!(matches!(
+        refusal(0.3, 0.2, &records),
+        DiagnoseError::Arm(ArmError::NoCommand { sample: 5, .. })
+    ));
+}
+
+#[test]
+fn bad_arm_lengths_and_times_are_refused() {
+    let records = log();
+    for (l1, l2) in [
+        (f64::NAN, 0.2),
+        (0.3, -0.2),
+        (f64::INFINITY, 0.2),
+        (0.0, 0.2),
+    ] {
+        assert!(
+            matches!(
+                refusal(l1, l2, &records),
+                DiagnoseError::Arm(ArmError::Arm(_))
+            ),
+            "{l1} {l2}"
+        );
+    }
+    let mut late = records.clone();
+    late[10].time = 1e9;
+    assert!(matches!(
+        refusal(0.3, 0.2, &late),
+        DiagnoseError::Arm(ArmError::Time { sample: 10, .. })
+    ));
+    assert!(matches!(
+        refusal(0.3, 0.2, &[]),
+        DiagnoseError::Arm(ArmError::Empty)
+    ));
+}
