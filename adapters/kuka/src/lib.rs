@@ -9,8 +9,14 @@
 #![forbid(unsafe_code)]
 
 pub mod codec;
+pub mod faults;
+pub mod grasp_frame;
+pub mod kernel_controller;
+pub mod kinematics;
+pub mod loopback;
 pub mod messages;
 pub mod session;
+pub mod sim_controller;
 pub mod udp;
 pub mod vectors;
 pub mod version;

@@ -1,0 +1,78 @@
+//! End to end over real UDP on loopback: the simulated FRI controller
+//! drives the reference plant, the FRI client runs the kernel, the whole
+//! estimation motion at a 1 ms send period (unpaced: as fast as the loop
+//! answers, see README).
+
+use limb_kernel::{KernelConfig, StateKind};
+use limb_kuka::kernel_controller::{LoopSettings, Overlay};
+use limb_kuka::loopback::{run_loopback, LoopbackRun};
+use limb_kuka::sim_controller::SimSettings;
+use limb_kuka::FriVersion;
+use limb_sim::operator::SessionPlan;
+use limb_sim::PlantParameters;
+
+/// Estimation motion (~29.3 s) + start-up, in 1 ms cycles.
+const ESTIMATION_CYCLES: u64 = 32_000;
+
+fn estimate(version: FriVersion, overlay: Overlay) -> LoopbackRun {
+    let mut sim = SimSettings::new(version);
+    sim.overlay = overlay;
+    let settings = LoopSettings {
+        overlay,
+        heading: sim.heading,
+        plan: SessionPlan::default(),
+    };
+    let run = run_loopback(
+        sim,
+        PlantParameters::new(0.30, 0.20),
+        KernelConfig::default(),
+        settings,
+        ESTIMATION_CYCLES,
+        |_, state| state >= StateKind::Validated,
+    )
+    .unwrap();
+    let record = run.controller.record();
+    eprintln!(
+        "{version} {overlay:?}: sim {:?}\nclient {:?}\nevents {:?}\nmodel {:?}",
+        {
+            let mut stats = run.sim.stats().clone();
+            stats.round_trips_us.clear();
+            stats
+        },
+        run.client,
+        record.events,
+        record.model
+    );
+    run
+}
+
+fn assert_estimated(run: &LoopbackRun) {
+    let record = run.controller.record();
+    assert!(
+        record
+            .events
+            .iter()
+            .any(|(_, what)| what.starts_with("Estimate → Validated")),
+        "{:?}",
+        record.events
+    );
+    assert_ne!(run.controller.kernel().state().kind(), StateKind::SafeStop);
+    let model = record.model.expect("a validated model");
+    let truth = run.sim.plant().truth();
+    assert!((model.upper_arm_length - 0.30).abs() < 2e-3, "{model:?}");
+    assert!((model.forearm_length - 0.20).abs() < 2e-3, "{model:?}");
+    let shoulder_error = ((model.shoulder[0] - truth.shoulder.x).powi(2)
+        + (model.shoulder[1] - truth.shoulder.z).powi(2))
+    .sqrt();
+    assert!(shoulder_error < 3e-3, "{model:?} vs {truth:?}");
+    let stats = run.sim.stats();
+    assert_eq!(stats.non_finite_replies, 0);
+    assert_eq!(stats.commanding_entries, 1);
+    assert_eq!(stats.overlay_aborts, 0);
+}
+
+#[test]
+fn joint_position_overlay_estimates_the_arm_over_udp() {
+    let run = estimate(FriVersion::V1_15, Overlay::JointPosition);
+    assert_estimated(&run);
+}
