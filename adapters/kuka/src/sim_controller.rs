@@ -201,6 +201,7 @@ pub struct SimController {
     entry_pending: bool,
     last_set_point_pose: Option<Pose>,
     stats: SimStats,
+    next_tick: Option<Instant>,
     buffer: [u8; MAX_DATAGRAM_BYTES + 1],
 }
 
@@ -232,6 +233,7 @@ impl SimController {
         plant: PlantParameters,
     ) -> Result<Self, SimError> {
         let socket = UdpSocket::bind(address)?;
+        socket.set_nonblocking(true)?;
         let plant = Plant::new(plant).map_err(SimError::Plant)?;
         let frame = GraspFrame::record(forward(&settings.grasp_joints), settings.heading);
         Ok(Self {
@@ -253,6 +255,7 @@ impl SimController {
             entry_pending: false,
             last_set_point_pose: None,
             stats: SimStats::default(),
+            next_tick: None,
             buffer: [0; MAX_DATAGRAM_BYTES + 1],
         })
     }
@@ -452,7 +455,11 @@ impl SimController {
         (out, delivered_now && intact)
     }
 
-    /// Waits until `deadline` for the reply to `counter`.
+    /// Waits until `deadline` for the reply to `counter`, polling the
+    /// non-blocking socket: a socket receive timeout is rounded up to the
+    /// kernel's tick (4 ms at 250 Hz), too coarse for a 1 ms period and for
+    /// timing replies. The simulated controller stands for a separate
+    /// machine, so it may spend a core on this.
     fn await_reply(
         &mut self,
         counter: u32,
@@ -460,23 +467,14 @@ impl SimController {
         deadline: Instant,
     ) -> Result<Option<FriCommandMessage>, SimError> {
         loop {
-            let now = Instant::now();
-            let Some(left) = deadline
-                .checked_duration_since(now)
-                .filter(|d| !d.is_zero())
-            else {
+            if Instant::now() >= deadline {
                 return Ok(None);
-            };
-            self.socket.set_read_timeout(Some(left))?;
+            }
             let length = match self.socket.recv_from(&mut self.buffer) {
                 Ok((length, _)) => length,
-                Err(error)
-                    if matches!(
-                        error.kind(),
-                        std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
-                    ) =>
-                {
-                    return Ok(None)
+                Err(error) if error.kind() == std::io::ErrorKind::WouldBlock => {
+                    std::thread::yield_now();
+                    continue;
                 }
                 Err(error) => return Err(error.into()),
             };
@@ -583,8 +581,15 @@ impl SimController {
     /// # Errors
     /// [`SimError`] on socket or encode failure.
     pub fn run_cycle(&mut self) -> Result<(), SimError> {
-        let cycle_start = Instant::now();
         let period = Duration::from_millis(u64::from(self.settings.send_period_ms.clamp(1, 100)));
+        let now = Instant::now();
+        // Paced: ticks on a fixed grid (no drift), re-anchored after an
+        // overrun of more than one period.
+        let cycle_start = match self.next_tick {
+            Some(tick) if self.settings.pacing == Pacing::RealTime && now < tick + period => tick,
+            _ => now,
+        };
+        self.next_tick = Some(cycle_start + period);
         let faults = self.settings.faults.at(self.cycle);
         let quality = self.quality(&faults);
         self.update_state(&faults, quality);
@@ -652,16 +657,12 @@ impl SimController {
         }
         self.stats.cycles += 1;
         self.cycle += 1;
-        if self.settings.pacing == Pacing::RealTime {
-            let wake = cycle_start + period;
-            if let Some(wait) = wake.checked_duration_since(Instant::now()) {
-                std::thread::sleep(wait);
-            }
-        }
-        if self.settings.pacing == Pacing::AsFastAsPossible && !(expecting && delivered) {
-            if let Some(wait) = deadline.checked_duration_since(Instant::now()) {
-                std::thread::sleep(wait);
-            }
+        let wake = match self.settings.pacing {
+            Pacing::RealTime => Some(cycle_start + period),
+            Pacing::AsFastAsPossible => (!(expecting && delivered)).then_some(deadline),
+        };
+        if let Some(wait) = wake.and_then(|wake| wake.checked_duration_since(Instant::now())) {
+            std::thread::sleep(wait);
         }
         Ok(())
     }
