@@ -20,7 +20,7 @@ use limb_kernel::motion::SetPoint;
 use limb_kernel::trace::{Cause, Event};
 use limb_kernel::{Kernel, KernelConfig, PathSample, Request, StateKind};
 pub use limb_sim::operator::SessionPlan;
-use limb_sim::operator::{completes_session, describe, Operator};
+use limb_sim::operator::{completes_session, describe, FittedModel, Operator};
 use serde::Serialize;
 
 /// A plant the kernel can close the loop on.
@@ -158,17 +158,17 @@ pub fn run_session(
 }
 
 fn model_report(arm: &limb_kernel::validate::ValidatedArm, truth: &Truth) -> ModelReport {
-    let e = arm.estimate();
-    let g = arm.geometry();
-    let shoulder = g.shoulder();
+    let model = FittedModel::of(arm);
     ModelReport {
-        l1: g.upper_arm_length(),
-        l2: g.forearm_length(),
-        shoulder: [shoulder.x, shoulder.z],
-        elbow: [e.elbow.x, e.elbow.z],
-        error_l1: g.upper_arm_length() - truth.l1,
-        error_l2: g.forearm_length() - truth.l2,
-        error_shoulder: shoulder.distance(Point::new(truth.shoulder[0], truth.shoulder[1])),
+        l1: model.upper_arm_length,
+        l2: model.forearm_length,
+        shoulder: [model.shoulder.x, model.shoulder.z],
+        elbow: [model.elbow.x, model.elbow.z],
+        error_l1: model.upper_arm_length - truth.l1,
+        error_l2: model.forearm_length - truth.l2,
+        error_shoulder: model
+            .shoulder
+            .distance(Point::new(truth.shoulder[0], truth.shoulder[1])),
     }
 }
 

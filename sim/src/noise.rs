@@ -23,7 +23,10 @@ impl Gaussian {
         }
     }
 
-    fn uniform(&mut self) -> f64 {
+    /// One uniform draw in (0, 1] (the source of the Gaussian draws; also
+    /// used for seeded random choices elsewhere, e.g. the KUKA simulated
+    /// controller's faults).
+    pub fn uniform(&mut self) -> f64 {
         let mut x = self.state;
         x ^= x >> 12;
         x ^= x << 25;

@@ -8,10 +8,12 @@
 //! target once the kernel is in Validated, finish once the target has been
 //! held still for [`SessionPlan::hold`]. [`Operator::observe`] records each
 //! step's command (the stillness test needs it). [`describe`] puts a trace
-//! event into words.
+//! event into words; [`FittedModel`] is the validated arm in numbers.
 
 use limb_kernel::arm::JointAngles;
+use limb_kernel::geometry::Point;
 use limb_kernel::trace::{Cause, Event, TraceEvent};
+use limb_kernel::validate::ValidatedArm;
 use limb_kernel::{Command, Request, StateKind};
 
 /// How the session is run.
@@ -40,6 +42,32 @@ impl Default for SessionPlan {
             },
             hold: 1.0,
             timeout: 120.0,
+        }
+    }
+}
+
+/// The arm model the kernel validated, frame S.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FittedModel {
+    /// Upper-arm length l1 [m].
+    pub upper_arm_length: f64,
+    /// Forearm length l2 [m].
+    pub forearm_length: f64,
+    /// Shoulder [m].
+    pub shoulder: Point,
+    /// Elbow at t = 0 [m].
+    pub elbow: Point,
+}
+
+impl FittedModel {
+    /// The model of `arm`.
+    pub fn of(arm: &ValidatedArm) -> Self {
+        let geometry = arm.geometry();
+        Self {
+            upper_arm_length: geometry.upper_arm_length(),
+            forearm_length: geometry.forearm_length(),
+            shoulder: geometry.shoulder(),
+            elbow: arm.estimate().elbow,
         }
     }
 }

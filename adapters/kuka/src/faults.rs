@@ -2,7 +2,8 @@
 //!
 //! A schedule is a list of faults, each active over a window of controller
 //! cycles (one cycle = one send period). Random choices (which datagram a
-//! random loss drops, garbage bytes) come from a seeded generator, so a
+//! random loss drops, garbage bytes) come from a generator seeded with the
+//! schedule's seed (`limb_sim::noise::Gaussian`'s uniform draws), so a
 //! schedule and a seed replay the same faults. Text form, comma-separated:
 //! `KIND@START[:CYCLES[:PARAMETER]]`, e.g.
 //! `random-loss@2000:3000:0.02,burst-loss@6000:50,counter-jump@7000:1:5000`.
@@ -225,31 +226,6 @@ pub fn parse_schedule(text: &str, seed: u64) -> Result<FaultSchedule, FaultParse
         .map(str::parse)
         .collect::<Result<Vec<_>, _>>()?;
     Ok(FaultSchedule::new(faults, seed))
-}
-
-/// SplitMix64: a small seeded generator for the random choices.
-#[derive(Debug, Clone)]
-pub struct SeededRandom(u64);
-
-impl SeededRandom {
-    /// A generator from `seed`.
-    pub fn new(seed: u64) -> Self {
-        Self(seed)
-    }
-
-    /// The next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in [0, 1).
-    pub fn unit(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
 }
 
 #[cfg(test)]

@@ -26,7 +26,7 @@
 
 use limb_kernel::geometry::Wrench;
 use limb_kernel::{Command, Kernel, KernelConfig, PathSample, Request, StateKind};
-use limb_sim::operator::{completes_session, describe, Operator, SessionPlan};
+use limb_sim::operator::{completes_session, describe, FittedModel, Operator, SessionPlan};
 
 use crate::grasp_frame::GraspFrame;
 use crate::kinematics::{forward, inverse, wrench_from_joint_torque};
@@ -61,17 +61,6 @@ pub struct LoopSettings {
     pub plan: SessionPlan,
 }
 
-/// The validated model as the kernel saw it.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ModelSnapshot {
-    /// Upper-arm length [m].
-    pub upper_arm_length: f64,
-    /// Forearm length [m].
-    pub forearm_length: f64,
-    /// Shoulder position in S (x, z) [m].
-    pub shoulder: [f64; 2],
-}
-
 /// What happened in the loop.
 #[derive(Debug, Clone, Default)]
 pub struct LoopRecord {
@@ -88,7 +77,7 @@ pub struct LoopRecord {
     /// Kernel events in words, with kernel time [s].
     pub events: Vec<(f64, String)>,
     /// The model, the first time the kernel was in Validated.
-    pub model: Option<ModelSnapshot>,
+    pub model: Option<FittedModel>,
     /// Manipulate → Validated happened.
     pub completed: bool,
     /// The last command.
@@ -172,15 +161,7 @@ impl KernelController {
         self.operator.observe(command);
         self.drain_events();
         if self.record.model.is_none() {
-            self.record.model = self.kernel.state().arm().map(|arm| {
-                let geometry = arm.geometry();
-                let shoulder = geometry.shoulder();
-                ModelSnapshot {
-                    upper_arm_length: geometry.upper_arm_length(),
-                    forearm_length: geometry.forearm_length(),
-                    shoulder: [shoulder.x, shoulder.z],
-                }
-            });
+            self.record.model = self.kernel.state().arm().map(FittedModel::of);
         }
         self.record.last_command = Some(command);
         command

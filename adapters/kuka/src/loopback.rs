@@ -10,6 +10,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use limb_kernel::{KernelConfig, StateKind};
+use limb_sim::operator::SessionPlan;
 use limb_sim::PlantParameters;
 
 use crate::kernel_controller::{KernelController, LoopSettings};
@@ -48,7 +49,8 @@ pub struct ClientCounts {
 }
 
 impl ClientCounts {
-    fn tally(&mut self, outcome: &CycleOutcome) {
+    /// Counts one cycle's outcome.
+    pub fn tally(&mut self, outcome: &CycleOutcome) {
         match outcome {
             CycleOutcome::Handled {
                 answered,
@@ -111,6 +113,33 @@ fn state_from(raw: u8) -> StateKind {
     .into_iter()
     .find(|kind| *kind as u8 == raw)
     .unwrap_or(StateKind::Grasp)
+}
+
+/// The `limb run` session on the reference arm (l1 = 0.30 m, l2 = 0.20 m,
+/// plant.md defaults) with the default kernel, the kernel's overlay and
+/// heading matching `sim`: [`run_loopback`] as the tests and the harness
+/// use it.
+///
+/// # Errors
+/// As [`run_loopback`].
+pub fn run_reference_session(
+    sim: SimSettings,
+    max_cycles: u64,
+    done: impl FnMut(&SimController, StateKind) -> bool,
+) -> Result<LoopbackRun, LoopbackError> {
+    let settings = LoopSettings {
+        overlay: sim.overlay,
+        heading: sim.heading,
+        plan: SessionPlan::default(),
+    };
+    run_loopback(
+        sim,
+        PlantParameters::new(0.30, 0.20),
+        KernelConfig::default(),
+        settings,
+        max_cycles,
+        done,
+    )
 }
 
 /// Runs the loop until `done(&sim, kernel_state)` (checked after each

@@ -39,11 +39,12 @@ use std::time::{Duration, Instant};
 
 use limb_kernel::geometry::{Pose, PoseRate};
 use limb_kernel::motion::SetPoint;
+use limb_sim::noise::Gaussian;
 use limb_sim::{Plant, PlantParameters};
 use nalgebra::Vector6;
 
 use crate::codec::{decode_command, encode_monitoring, EncodeError, MAX_DATAGRAM_BYTES};
-use crate::faults::{ActiveFaults, FaultSchedule, SeededRandom};
+use crate::faults::{ActiveFaults, FaultSchedule};
 use crate::grasp_frame::GraspFrame;
 use crate::kernel_controller::Overlay;
 use crate::kinematics::{forward, inverse, joint_torque_from_wrench};
@@ -55,6 +56,8 @@ use crate::messages::{
 use crate::session::JointVector;
 use crate::version::FriVersion;
 
+/// How many recent send times are kept to time late replies.
+pub const SENT_MEMORY: usize = 32;
 /// Cycles over which missed replies set the connection quality.
 pub const QUALITY_WINDOW: usize = 100;
 /// A reply synchronises COMMANDING_WAIT when every joint is within this of
@@ -167,6 +170,9 @@ pub struct SimStats {
     pub missed_with_delivery: u64,
     /// Replies to another counter (late, duplicated) or undecodable.
     pub stray_replies: u64,
+    /// Of the stray replies, those answering one of the last
+    /// [`SENT_MEMORY`] monitoring datagrams after its deadline.
+    pub late_replies: u64,
     /// Replies carrying a non-finite number (must stay 0).
     pub non_finite_replies: u64,
     /// Overlay aborts (COMMANDING_* → MONITORING_READY on quality).
@@ -175,10 +181,41 @@ pub struct SimStats {
     pub commanding_entries: u64,
     /// Largest first-target jump from the IPO position at an entry [rad].
     pub max_entry_jump: f64,
-    /// Round trips send → reply of on-time replies [µs].
+    /// Round trips send → reply [µs], on-time and late replies.
     pub round_trips_us: Vec<u32>,
     /// Inverse kinematics failures of the robot model (joints kept).
     pub inverse_failures: u64,
+}
+
+/// Round-trip percentiles of on-time replies [µs].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LatencySummary {
+    /// Number of round trips.
+    pub samples: usize,
+    /// Median [µs].
+    pub p50_us: f64,
+    /// 99th percentile [µs].
+    pub p99_us: f64,
+    /// Largest [µs].
+    pub max_us: f64,
+}
+
+impl SimStats {
+    /// Percentiles of [`SimStats::round_trips_us`] (NaN when empty).
+    pub fn latency(&self) -> LatencySummary {
+        let mut sorted = self.round_trips_us.clone();
+        sorted.sort_unstable();
+        let percentile = |p: f64| {
+            let index = ((sorted.len() as f64 - 1.0) * p).round() as usize;
+            sorted.get(index).map_or(f64::NAN, |v| f64::from(*v))
+        };
+        LatencySummary {
+            samples: sorted.len(),
+            p50_us: percentile(0.5),
+            p99_us: percentile(0.99),
+            max_us: percentile(1.0),
+        }
+    }
 }
 
 /// The simulated controller.
@@ -194,13 +231,14 @@ pub struct SimController {
     cycles_in_state: u32,
     counter: u32,
     cycle: u64,
-    random: SeededRandom,
+    random: Gaussian,
     delayed: VecDeque<(u64, Vec<u8>)>,
     held_for_reorder: Option<Vec<u8>>,
     misses: VecDeque<bool>,
     entry_pending: bool,
     last_set_point_pose: Option<Pose>,
     stats: SimStats,
+    sent_times: VecDeque<(u32, Instant)>,
     next_tick: Option<Instant>,
     buffer: [u8; MAX_DATAGRAM_BYTES + 1],
 }
@@ -239,7 +277,7 @@ impl SimController {
         Ok(Self {
             socket,
             client,
-            random: SeededRandom::new(settings.faults.seed),
+            random: Gaussian::new(settings.faults.seed),
             joints: settings.grasp_joints,
             ipo: settings.grasp_joints,
             settings,
@@ -255,6 +293,7 @@ impl SimController {
             entry_pending: false,
             last_set_point_pose: None,
             stats: SimStats::default(),
+            sent_times: VecDeque::with_capacity(SENT_MEMORY),
             next_tick: None,
             buffer: [0; MAX_DATAGRAM_BYTES + 1],
         })
@@ -409,8 +448,12 @@ impl SimController {
     fn inject(&mut self, faults: &ActiveFaults, mut datagram: Vec<u8>) -> (Vec<Vec<u8>>, bool) {
         let mut out = Vec::new();
         if faults.garbage {
-            let length = 1 + (self.random.next_u64() % 64) as usize;
-            out.push((0..length).map(|_| self.random.next_u64() as u8).collect());
+            let length = 1 + (self.random.uniform() * 63.0) as usize;
+            out.push(
+                (0..length)
+                    .map(|_| (self.random.uniform() * 255.0) as u8)
+                    .collect(),
+            );
             self.stats.garbage_sent += 1;
         }
         let mut intact = true;
@@ -421,7 +464,7 @@ impl SimController {
             intact = false;
         }
         let mut delivered_now = false;
-        if faults.loss > 0.0 && self.random.unit() < faults.loss {
+        if faults.loss > 0.0 && self.random.uniform() <= faults.loss {
             self.stats.datagrams_dropped += 1;
         } else if faults.delay > 0 {
             self.delayed
@@ -463,7 +506,6 @@ impl SimController {
     fn await_reply(
         &mut self,
         counter: u32,
-        sent_at: Instant,
         deadline: Instant,
     ) -> Result<Option<FriCommandMessage>, SimError> {
         loop {
@@ -479,17 +521,29 @@ impl SimController {
                 Err(error) => return Err(error.into()),
             };
             let datagram = self.buffer.get(..length).unwrap_or_default();
-            match decode_command(datagram, self.settings.version) {
-                Ok(reply) if reply.header.reflected_sequence_counter == counter => {
-                    self.stats.replies_on_time += 1;
-                    let round_trip = sent_at.elapsed().as_micros();
-                    self.stats
-                        .round_trips_us
-                        .push(u32::try_from(round_trip).unwrap_or(u32::MAX));
-                    return Ok(Some(reply));
-                }
-                _ => self.stats.stray_replies += 1,
+            let Ok(reply) = decode_command(datagram, self.settings.version) else {
+                self.stats.stray_replies += 1;
+                continue;
+            };
+            let reflected = reply.header.reflected_sequence_counter;
+            let sent_at = self
+                .sent_times
+                .iter()
+                .rev()
+                .find(|(sent, _)| *sent == reflected)
+                .map(|(_, at)| *at);
+            if let Some(sent_at) = sent_at {
+                let round_trip = sent_at.elapsed().as_micros();
+                self.stats
+                    .round_trips_us
+                    .push(u32::try_from(round_trip).unwrap_or(u32::MAX));
             }
+            if reflected == counter {
+                self.stats.replies_on_time += 1;
+                return Ok(Some(reply));
+            }
+            self.stats.stray_replies += 1;
+            self.stats.late_replies += u64::from(sent_at.is_some());
         }
     }
 
@@ -608,11 +662,16 @@ impl SimController {
         self.counter = self.counter.wrapping_add(1);
         let datagram = encode_monitoring(&message, self.settings.version)?;
         let (datagrams, delivered) = self.inject(&faults, datagram);
+        // Taken before sending: the client may answer before send_to returns.
+        let sent_at = Instant::now();
         for datagram in &datagrams {
             self.socket.send_to(datagram, self.client)?;
         }
         self.stats.datagrams_sent += datagrams.len() as u64 - u64::from(faults.garbage);
-        let sent_at = Instant::now();
+        if self.sent_times.len() == SENT_MEMORY {
+            self.sent_times.pop_front();
+        }
+        self.sent_times.push_back((counter, sent_at));
         let expecting = self.state != SessionState::Idle;
         let deadline = match self.settings.pacing {
             Pacing::RealTime => cycle_start + period,
@@ -622,7 +681,7 @@ impl SimController {
             Pacing::AsFastAsPossible => sent_at + period,
         };
         let reply = if expecting {
-            self.await_reply(counter, sent_at, deadline)?
+            self.await_reply(counter, deadline)?
         } else {
             None
         };

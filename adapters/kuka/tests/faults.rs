@@ -3,15 +3,12 @@
 //! kernel over real loopback UDP, the fault in the middle of the
 //! estimation motion (at cycle 600, ≈ 0.5 s after it started), unpaced.
 
-use limb_kernel::{KernelConfig, StateKind};
+use limb_kernel::StateKind;
 use limb_kuka::faults::parse_schedule;
-use limb_kuka::kernel_controller::{LoopSettings, Overlay};
-use limb_kuka::loopback::{run_loopback, LoopbackRun, MAX_JOINT_STEP};
+use limb_kuka::loopback::{run_reference_session, LoopbackRun, MAX_JOINT_STEP};
 use limb_kuka::messages::SessionState;
 use limb_kuka::sim_controller::SimSettings;
 use limb_kuka::FriVersion;
-use limb_sim::operator::SessionPlan;
-use limb_sim::PlantParameters;
 use std::sync::Mutex;
 
 /// One loop at a time: unpaced, the kernel's clock is the robot's, and two
@@ -26,20 +23,7 @@ fn run(version: FriVersion, faults: &str, cycles: u64) -> LoopbackRun {
         .unwrap_or_else(std::sync::PoisonError::into_inner);
     let mut sim = SimSettings::new(version);
     sim.faults = parse_schedule(faults, 42).unwrap();
-    let settings = LoopSettings {
-        overlay: Overlay::JointPosition,
-        heading: sim.heading,
-        plan: SessionPlan::default(),
-    };
-    let run = run_loopback(
-        sim,
-        PlantParameters::new(0.30, 0.20),
-        KernelConfig::default(),
-        settings,
-        cycles,
-        |_, _| false,
-    )
-    .unwrap();
+    let run = run_reference_session(sim, cycles, |_, _| false).unwrap();
     let stats = run.sim.stats();
     eprintln!(
         "{faults}: aborts {} entries {} missed {} (delivered {}) stray {} dropped {} jump {:.2e}\n  client {:?}\n  events {:?}",

@@ -3,13 +3,11 @@
 //! estimation motion at a 1 ms send period (unpaced: as fast as the loop
 //! answers, see README).
 
-use limb_kernel::{KernelConfig, StateKind};
-use limb_kuka::kernel_controller::{LoopSettings, Overlay};
-use limb_kuka::loopback::{run_loopback, LoopbackRun};
+use limb_kernel::StateKind;
+use limb_kuka::kernel_controller::Overlay;
+use limb_kuka::loopback::{run_reference_session, LoopbackRun};
 use limb_kuka::sim_controller::SimSettings;
 use limb_kuka::FriVersion;
-use limb_sim::operator::SessionPlan;
-use limb_sim::PlantParameters;
 use std::sync::Mutex;
 
 /// Estimation motion (~29.3 s) + start-up, in 1 ms cycles.
@@ -25,19 +23,9 @@ fn estimate(version: FriVersion, overlay: Overlay) -> LoopbackRun {
         .unwrap_or_else(std::sync::PoisonError::into_inner);
     let mut sim = SimSettings::new(version);
     sim.overlay = overlay;
-    let settings = LoopSettings {
-        overlay,
-        heading: sim.heading,
-        plan: SessionPlan::default(),
-    };
-    let run = run_loopback(
-        sim,
-        PlantParameters::new(0.30, 0.20),
-        KernelConfig::default(),
-        settings,
-        ESTIMATION_CYCLES,
-        |_, state| state >= StateKind::Validated,
-    )
+    let run = run_reference_session(sim, ESTIMATION_CYCLES, |_, state| {
+        state >= StateKind::Validated
+    })
     .unwrap();
     let record = run.controller.record();
     eprintln!(
@@ -69,9 +57,7 @@ fn assert_estimated(run: &LoopbackRun) {
     let truth = run.sim.plant().truth();
     assert!((model.upper_arm_length - 0.30).abs() < 1e-3, "{model:?}");
     assert!((model.forearm_length - 0.20).abs() < 1e-3, "{model:?}");
-    let shoulder_error = ((model.shoulder[0] - truth.shoulder.x).powi(2)
-        + (model.shoulder[1] - truth.shoulder.z).powi(2))
-    .sqrt();
+    let shoulder_error = model.shoulder.distance(truth.shoulder);
     assert!(shoulder_error < 1e-3, "{model:?} vs {truth:?}");
     let stats = run.sim.stats();
     assert_eq!(stats.non_finite_replies, 0);
