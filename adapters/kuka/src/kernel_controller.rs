@@ -8,8 +8,9 @@
 //! 2. measured joints → iiwa forward kinematics → grasp pose (x, z, ψ) in
 //!    S; `externalTorque` → flange wrench F = (J Jᵀ)⁻¹ J τ → (fx, fz, ty) in
 //!    S ([`crate::kinematics`]);
-//! 3. kernel time = the robot's time stamp (monotone: never behind the last
-//!    kernel time); the operator ([`limb_sim::operator`]) may make a request
+//! 3. kernel time = the robot's time stamp since the first message (kept
+//!    monotone: never behind the last kernel time; the client's clock when
+//!    a message has no time stamp); the operator ([`limb_sim::operator`]) may make a request
 //!    — only while the robot is COMMANDING_ACTIVE with quality ≥ GOOD;
 //! 4. if the robot is not commanding (overlay aborted, quality dropped,
 //!    IDLE) while the kernel is moving the arm (Estimate, Manipulate), the
@@ -22,7 +23,10 @@
 //!
 //! When the link is silent, [`Controller::on_link_stale`] steps the kernel
 //! with the last frame at (last message time + silence): past the kernel's
-//! `max_sensor_age` (20 ms) its watchdog trips the safe stop.
+//! `max_sensor_age` (20 ms) its watchdog trips the safe stop. A gap between
+//! two robot time stamps longer than `max_sensor_age` is silence too: the
+//! kernel is first stepped with the old frame at the new time (so an
+//! unpaced simulation, whose clock is the plant's, trips the same way).
 
 use limb_kernel::geometry::Wrench;
 use limb_kernel::{Command, Kernel, KernelConfig, PathSample, Request, StateKind};
@@ -66,7 +70,8 @@ pub struct LoopSettings {
 pub struct LoopRecord {
     /// Kernel steps taken (monitoring messages and stale ticks).
     pub steps: u64,
-    /// Steps taken because the link was stale.
+    /// Steps taken because the link was stale (receive timeout, or a gap
+    /// between time stamps longer than the kernel's sensor-age limit).
     pub stale_steps: u64,
     /// Monitoring messages without a usable measured joint position.
     pub missing_measurements: u64,
@@ -93,6 +98,7 @@ pub struct KernelController {
     last_sample: Option<PathSample>,
     last_message_time: f64,
     last_now: f64,
+    time_origin: Option<f64>,
     last_target: Option<JointVector>,
     record: LoopRecord,
 }
@@ -113,6 +119,7 @@ impl KernelController {
             last_sample: None,
             last_message_time: 0.0,
             last_now: f64::NEG_INFINITY,
+            time_origin: None,
             last_target: None,
             record: LoopRecord::default(),
         })
@@ -215,11 +222,21 @@ impl KernelController {
 
 impl Controller for KernelController {
     fn on_monitoring(&mut self, view: &MonitoringView, now: f64) -> CommandIntent {
-        let time = view.timestamp.unwrap_or(now).max(self.last_now);
+        let stamp = view.timestamp.unwrap_or(now);
+        let origin = *self.time_origin.get_or_insert(stamp);
+        let time = (stamp - origin).max(self.last_now);
         let Some(sample) = self.sample(view, time) else {
             self.record.missing_measurements += 1;
             return CommandIntent::Hold;
         };
+        if let Some(last) = self.last_sample {
+            // Silence seen on the robot's clock: before this frame, the
+            // kernel's data was as old as the gap; the watchdog judges that.
+            if time - last.time > self.kernel.config().limits.max_sensor_age {
+                self.record.stale_steps += 1;
+                self.step(&last, time);
+            }
+        }
         self.last_message_time = time;
         self.last_sample = Some(sample);
         let commanding = view.session_state == SessionState::CommandingActive

@@ -4,7 +4,7 @@
 //! loopback, the client on its own thread. Used by the acceptance tests,
 //! the `kuka_loop` latency harness and nothing else.
 
-use std::net::SocketAddr;
+use std::net::{SocketAddr, UdpSocket};
 use std::sync::atomic::{AtomicBool, AtomicU8, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
@@ -15,12 +15,17 @@ use limb_sim::PlantParameters;
 
 use crate::kernel_controller::{KernelController, LoopSettings};
 use crate::session::SequenceCheck;
-use crate::sim_controller::{SimController, SimError, SimSettings};
+use crate::sim_controller::{Pacing, SimController, SimError, SimSettings};
 use crate::udp::{ClientError, CycleOutcome, FriClient};
 
 /// The client's receive timeout: a quarter of the kernel's default sensor
 /// age limit (20 ms), so a silent link reaches the watchdog in time.
 pub const CLIENT_RECEIVE_TIMEOUT: Duration = Duration::from_millis(5);
+/// The client's receive timeout against an unpaced controller: there the
+/// robot's clock is the plant's, and silence is seen as a gap between time
+/// stamps ([`crate::kernel_controller`]); wall-clock stalls of a loaded
+/// machine are not link silence.
+pub const UNPACED_CLIENT_RECEIVE_TIMEOUT: Duration = Duration::from_millis(500);
 /// Largest joint-target change per reply of the loop [rad] (2 rad/s at
 /// 1 kHz; the kernel's 0.15 m/s speed limit needs well under 1 rad/s).
 pub const MAX_JOINT_STEP: f64 = 0.002;
@@ -157,12 +162,11 @@ pub fn run_loopback(
     mut done: impl FnMut(&SimController, StateKind) -> bool,
 ) -> Result<LoopbackRun, LoopbackError> {
     let loopback = SocketAddr::from(([127, 0, 0, 1], 0));
-    let mut client = FriClient::bind(
-        loopback,
-        sim.version,
-        MAX_JOINT_STEP,
-        CLIENT_RECEIVE_TIMEOUT,
-    )?;
+    let receive_timeout = match sim.pacing {
+        Pacing::RealTime => CLIENT_RECEIVE_TIMEOUT,
+        Pacing::AsFastAsPossible => UNPACED_CLIENT_RECEIVE_TIMEOUT,
+    };
+    let mut client = FriClient::bind(loopback, sim.version, MAX_JOINT_STEP, receive_timeout)?;
     let mut controller = KernelController::new(kernel, settings).map_err(LoopbackError::Kernel)?;
     let client_address = client.local_addr()?;
     let mut sim = SimController::bind(loopback, client_address, sim, plant)?;
@@ -174,6 +178,10 @@ pub fn run_loopback(
         let mut counts = ClientCounts::default();
         while !client_stop.load(Ordering::Relaxed) {
             let outcome = client.run_cycle(&mut controller)?;
+            if client_stop.load(Ordering::Relaxed) {
+                // The wake-up datagram below, or silence after the end.
+                break;
+            }
             counts.tally(&outcome);
             client_state.store(controller.kernel().state().kind() as u8, Ordering::Relaxed);
         }
@@ -190,10 +198,14 @@ pub fn run_loopback(
         }
     }
     stop.store(true, Ordering::Relaxed);
+    // Wake the client from its receive (a one-byte datagram it rejects), so
+    // the end of the run is not a link silence seen by the kernel.
+    let waker = UdpSocket::bind(loopback).and_then(|socket| socket.send_to(&[0], client_address));
     let (controller, client) = client_thread
         .join()
         .map_err(|_| LoopbackError::ClientPanicked)??;
     result?;
+    waker.map_err(SimError::Io)?;
     Ok(LoopbackRun {
         sim,
         controller,

@@ -56,6 +56,10 @@ use crate::messages::{
 use crate::session::JointVector;
 use crate::version::FriVersion;
 
+/// How long the controller spins for a reply after sending.
+pub const SPIN_FOR: Duration = Duration::from_micros(200);
+/// Poll interval after [`SPIN_FOR`].
+pub const POLL_EVERY: Duration = Duration::from_micros(50);
 /// How many recent send times are kept to time late replies.
 pub const SENT_MEMORY: usize = 32;
 /// Cycles over which missed replies set the connection quality.
@@ -111,7 +115,9 @@ pub struct SimSettings {
 }
 
 impl SimSettings {
-    /// Defaults: 1 ms, joint position, unpaced with a 50 ms reply timeout,
+    /// Defaults: 1 ms, joint position, unpaced with a 2 s reply timeout
+    /// (unpaced, the robot's clock waits for the client, e.g. for the
+    /// kernel's end-of-estimation fit in a debug build),
     /// grasp at [`DEFAULT_GRASP_JOINTS`], 20 + 20 cycles before commanding,
     /// no faults.
     pub fn new(version: FriVersion) -> Self {
@@ -120,7 +126,7 @@ impl SimSettings {
             send_period_ms: 1,
             overlay: Overlay::JointPosition,
             pacing: Pacing::AsFastAsPossible,
-            reply_timeout: Duration::from_millis(50),
+            reply_timeout: Duration::from_secs(2),
             grasp_joints: DEFAULT_GRASP_JOINTS,
             heading: DEFAULT_HEADING,
             ready_after: 20,
@@ -498,24 +504,32 @@ impl SimController {
         (out, delivered_now && intact)
     }
 
-    /// Waits until `deadline` for the reply to `counter`, polling the
-    /// non-blocking socket: a socket receive timeout is rounded up to the
-    /// kernel's tick (4 ms at 250 Hz), too coarse for a 1 ms period and for
-    /// timing replies. The simulated controller stands for a separate
-    /// machine, so it may spend a core on this.
+    /// Waits until `deadline` for the reply to `counter` sent at `sent_at`,
+    /// polling the non-blocking socket: a socket receive timeout is rounded
+    /// up to the kernel's tick (4 ms at 250 Hz), too coarse for a 1 ms
+    /// period and for timing replies. It spins (yielding) for
+    /// [`SPIN_FOR`] after sending, where nearly all replies arrive, then
+    /// polls every [`POLL_EVERY`] so as not to take a core from the client
+    /// (late replies are timed to about that resolution).
     fn await_reply(
         &mut self,
         counter: u32,
+        sent_at: Instant,
         deadline: Instant,
     ) -> Result<Option<FriCommandMessage>, SimError> {
         loop {
-            if Instant::now() >= deadline {
+            let now = Instant::now();
+            if now >= deadline {
                 return Ok(None);
             }
             let length = match self.socket.recv_from(&mut self.buffer) {
                 Ok((length, _)) => length,
                 Err(error) if error.kind() == std::io::ErrorKind::WouldBlock => {
-                    std::thread::yield_now();
+                    if now.duration_since(sent_at) < SPIN_FOR {
+                        std::thread::yield_now();
+                    } else {
+                        std::thread::sleep(POLL_EVERY.min(deadline - now));
+                    }
                     continue;
                 }
                 Err(error) => return Err(error.into()),
@@ -681,7 +695,7 @@ impl SimController {
             Pacing::AsFastAsPossible => sent_at + period,
         };
         let reply = if expecting {
-            self.await_reply(counter, deadline)?
+            self.await_reply(counter, sent_at, deadline)?
         } else {
             None
         };

@@ -13,8 +13,7 @@ use std::sync::Mutex;
 /// Estimation motion (~29.3 s) + start-up, in 1 ms cycles.
 const ESTIMATION_CYCLES: u64 = 32_000;
 
-/// One loop at a time (see tests/faults.rs: two unpaced loops on two cores
-/// can stall a client past the kernel's 20 ms sensor-age limit).
+/// One loop at a time, to keep the suite's load on two cores modest.
 static SERIAL: Mutex<()> = Mutex::new(());
 
 fn estimate(version: FriVersion, overlay: Overlay) -> LoopbackRun {
