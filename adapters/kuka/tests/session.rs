@@ -92,27 +92,35 @@ fn counters_start_at_zero_and_reflect() {
     }
 }
 
-#[test]
-fn answers_every_receive_multiplier_th_message() {
-    let mut session = ClientSession::new(FriVersion::V2_5, 0.01);
-    let answered: Vec<bool> = (0..6)
+/// Which of the MONITORING_READY messages with `counters` were answered.
+fn answered(
+    session: &mut ClientSession,
+    controller: &mut impl Controller,
+    counters: impl IntoIterator<Item = u32>,
+    multiplier: u32,
+) -> Vec<bool> {
+    counters
+        .into_iter()
         .map(|counter| {
+            let message = monitoring(
+                SessionState::MonitoringReady,
+                ConnectionQuality::Good,
+                counter,
+                multiplier,
+            );
             session
-                .on_monitoring(
-                    &monitoring(
-                        SessionState::MonitoringReady,
-                        ConnectionQuality::Good,
-                        counter,
-                        3,
-                    ),
-                    &mut Fixed(CommandIntent::Hold),
-                    0.0,
-                )
+                .on_monitoring(&message, controller, 0.0)
                 .command
                 .is_some()
         })
-        .collect();
-    assert_eq!(answered, [false, false, true, false, false, true]);
+        .collect()
+}
+
+#[test]
+fn answers_every_receive_multiplier_th_message() {
+    let mut session = ClientSession::new(FriVersion::V2_5, 0.01);
+    let pattern = answered(&mut session, &mut Fixed(CommandIntent::Hold), 0..6, 3);
+    assert_eq!(pattern, [false, false, true, false, false, true]);
 }
 
 #[test]
@@ -247,25 +255,8 @@ fn duplicates_and_stale_datagrams_are_dropped_without_calling_the_controller() {
     }
     let mut session = ClientSession::new(FriVersion::V1_15, 0.01);
     let mut controller = Counting(0);
-    let answered: Vec<bool> = [10, 10, 12, 11, 13]
-        .into_iter()
-        .map(|counter| {
-            session
-                .on_monitoring(
-                    &monitoring(
-                        SessionState::MonitoringReady,
-                        ConnectionQuality::Good,
-                        counter,
-                        1,
-                    ),
-                    &mut controller,
-                    0.0,
-                )
-                .command
-                .is_some()
-        })
-        .collect();
-    assert_eq!(answered, [true, false, true, false, true]);
+    let pattern = answered(&mut session, &mut controller, [10, 10, 12, 11, 13], 1);
+    assert_eq!(pattern, [true, false, true, false, true]);
     assert_eq!(controller.0, 3);
 }
 
