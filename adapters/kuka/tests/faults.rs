@@ -5,6 +5,7 @@
 
 use limb_kernel::StateKind;
 use limb_kuka::faults::parse_schedule;
+use limb_kuka::kernel_controller::Overlay;
 use limb_kuka::loopback::{run_reference_session, LoopbackRun, MAX_JOINT_STEP};
 use limb_kuka::messages::SessionState;
 use limb_kuka::sim_controller::SimSettings;
@@ -15,10 +16,20 @@ use std::sync::Mutex;
 static SERIAL: Mutex<()> = Mutex::new(());
 
 fn run(version: FriVersion, faults: &str, cycles: u64) -> LoopbackRun {
+    run_with_overlay(version, Overlay::JointPosition, faults, cycles)
+}
+
+fn run_with_overlay(
+    version: FriVersion,
+    overlay: Overlay,
+    faults: &str,
+    cycles: u64,
+) -> LoopbackRun {
     let _serial = SERIAL
         .lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
     let mut sim = SimSettings::new(version);
+    sim.overlay = overlay;
     sim.faults = parse_schedule(faults, 42).unwrap();
     let run = run_reference_session(sim, cycles, |_, _| false).unwrap();
     let stats = run.sim.stats();
@@ -157,4 +168,19 @@ fn wrong_crc_is_rejected_as_a_lost_datagram() {
     assert_eq!(run.client.rejected, 5);
     assert_eq!(run.sim.stats().missed_cycles, 5);
     assert_rides_through(&run);
+}
+
+/// Wrench overlay: a loss burst trips the watchdog the same way; the
+/// overlay re-enters (wrench mode has no joint target to jump: the first
+/// replies carry the IPO/measured position and a zero wrench).
+#[test]
+fn wrench_overlay_loss_burst_trips_the_watchdog_then_reenters() {
+    let run = run_with_overlay(FriVersion::V2_7, Overlay::Wrench, "burst-loss@600:50", 1200);
+    assert!(stopped_because(&run, "StaleSensor"));
+    assert_eq!(kernel_state(&run), StateKind::SafeStop);
+    assert_eq!(run.sim.stats().commanding_entries, 2);
+    assert_eq!(run.sim.state(), SessionState::CommandingActive);
+    let command = run.controller.record().last_command.unwrap();
+    assert_eq!(command.wrench, limb_kernel::geometry::Wrench::ZERO);
+    eprintln!("grasp after the stop: {:?}", run.sim.plant().truth());
 }
