@@ -23,9 +23,7 @@ impl Gaussian {
         }
     }
 
-    /// One uniform draw in (0, 1] (the source of the Gaussian draws; also
-    /// used for seeded random choices elsewhere, e.g. the KUKA simulated
-    /// controller's faults).
+    /// One uniform draw in (0, 1] (the stream [`Gaussian::sample`] uses).
     pub fn uniform(&mut self) -> f64 {
         let mut x = self.state;
         x ^= x >> 12;
