@@ -1,14 +1,20 @@
 //! `limb kuka ...`: tools for the KUKA FRI adapter (`limb-kuka`).
 
 use clap::Subcommand;
+use limb_kernel::KernelConfig;
+use limb_kuka::faults::parse_schedule;
+use limb_kuka::kernel_controller::{KernelController, LoopSettings, Overlay};
+use limb_kuka::loopback::{ClientCounts, CLIENT_RECEIVE_TIMEOUT, MAX_JOINT_STEP};
 use limb_kuka::messages::{
     ClientCommandMode, ConnectionQuality, FriCommandMessage, FriMonitoringMessage, JointValues,
     MessageHeader, SessionState,
 };
-use limb_kuka::session::{CommandIntent, Controller, MonitoringView};
-use limb_kuka::udp::{CycleOutcome, FriClient};
+use limb_kuka::sim_controller::{Pacing, SimController, SimSettings};
+use limb_kuka::udp::FriClient;
 use limb_kuka::vectors::{example_command, example_monitoring, SESSION_STATES};
 use limb_kuka::{decode_command, decode_monitoring, encode_command, encode_monitoring, FriVersion};
+use limb_sim::operator::SessionPlan;
+use limb_sim::PlantParameters;
 use serde_json::{json, Value};
 use std::net::SocketAddr;
 use std::time::{Duration, Instant};
@@ -38,8 +44,9 @@ pub enum KukaCommand {
         #[arg(long = "fri-version")]
         fri_version: String,
     },
-    /// Run the FRI client with a placeholder controller that holds position
-    /// (the kernel is not plugged in yet); prints a cycle summary as JSON.
+    /// Run the FRI client with the kernel inside against a robot controller
+    /// (the grasp must be closed at start: the first measured flange pose
+    /// is frame S); prints a cycle and session summary as JSON.
     Run {
         /// FRI version: 1.11, 1.14, 1.15, 1.16, 2.5 or 2.7.
         #[arg(long = "fri-version")]
@@ -48,66 +55,212 @@ pub enum KukaCommand {
         #[arg(long, default_value_t = 30200)]
         port: u16,
         /// Stop after this many seconds.
-        #[arg(long, default_value_t = 10.0)]
+        #[arg(long, default_value_t = 60.0)]
         seconds: f64,
+        /// How the kernel's output is sent: joint-position or wrench.
+        #[arg(long, default_value = "joint-position")]
+        overlay: String,
+        /// Heading of frame S's x axis (wrist → shoulder) about the robot
+        /// base z axis [rad].
+        #[arg(long, default_value_t = limb_kuka::sim_controller::DEFAULT_HEADING)]
+        heading: f64,
+    },
+    /// Run the simulated FRI controller (robot side, reference plant,
+    /// optional faults) sending to a client; prints counts and round-trip
+    /// latency as JSON.
+    SimController {
+        /// FRI version: 1.11, 1.14, 1.15, 1.16, 2.5 or 2.7.
+        #[arg(long = "fri-version")]
+        fri_version: String,
+        /// The client's address.
+        #[arg(long, default_value = "127.0.0.1:30200")]
+        client: SocketAddr,
+        /// Local UDP port (0: any).
+        #[arg(long, default_value_t = 0)]
+        port: u16,
+        /// Controller cycles to run (one per send period).
+        #[arg(long, default_value_t = 60_000)]
+        cycles: u64,
+        /// Send period [ms].
+        #[arg(long = "send-period", default_value_t = 1)]
+        send_period: u32,
+        /// Command mode the robot expects: joint-position or wrench.
+        #[arg(long, default_value = "joint-position")]
+        overlay: String,
+        /// Fault schedule, e.g. `burst-loss@2000:50,idle@5000:100` (see
+        /// the limb-kuka README).
+        #[arg(long, default_value = "")]
+        faults: String,
+        /// Seed of the faults' random choices.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Do not pace: next cycle as soon as the reply is in.
+        #[arg(long)]
+        unpaced: bool,
+        /// Upper-arm length of the simulated person [m].
+        #[arg(long, default_value_t = 0.30)]
+        l1: f64,
+        /// Forearm length of the simulated person [m].
+        #[arg(long, default_value_t = 0.20)]
+        l2: f64,
     },
 }
 
-/// Placeholder controller: always holds (IPO / last target).
-struct HoldController {
-    stale_calls: u64,
-}
-
-impl Controller for HoldController {
-    fn on_monitoring(&mut self, _view: &MonitoringView, _now: f64) -> CommandIntent {
-        CommandIntent::Hold
-    }
-    fn on_link_stale(&mut self, _silent_for: f64, _now: f64) {
-        self.stale_calls += 1;
+fn parse_overlay(text: &str) -> Result<Overlay, CliError> {
+    match text {
+        "joint-position" => Ok(Overlay::JointPosition),
+        "wrench" => Ok(Overlay::Wrench),
+        other => Err(CliError::BadInput(format!(
+            "--overlay {other}: expected joint-position or wrench"
+        ))),
     }
 }
 
-/// Largest target change per reply of the placeholder run (rad).
-const RUN_MAX_JOINT_STEP: f64 = 0.001;
-
-fn run_client(fri_version: &str, port: u16, seconds: f64) -> Result<(), CliError> {
+fn run_client(
+    fri_version: &str,
+    port: u16,
+    seconds: f64,
+    overlay: &str,
+    heading: f64,
+) -> Result<(), CliError> {
     let version = parse_version(fri_version)?;
+    let overlay = parse_overlay(overlay)?;
     let duration = Duration::try_from_secs_f64(seconds)
         .map_err(|error| CliError::BadInput(format!("--seconds {seconds}: {error}")))?;
+    if !heading.is_finite() {
+        return Err(CliError::BadInput(format!(
+            "--heading {heading}: not finite"
+        )));
+    }
     let address = SocketAddr::from(([0, 0, 0, 0], port));
-    let mut client = FriClient::bind(
-        address,
-        version,
-        RUN_MAX_JOINT_STEP,
-        Duration::from_millis(100),
-    )
-    .map_err(|error| CliError::BadInput(format!("{address}: {error}")))?;
-    let mut controller = HoldController { stale_calls: 0 };
-    let (mut answered, mut rejected, mut faults) = (0u64, 0u64, 0u64);
+    let mut client = FriClient::bind(address, version, MAX_JOINT_STEP, CLIENT_RECEIVE_TIMEOUT)
+        .map_err(|error| CliError::BadInput(format!("{address}: {error}")))?;
+    let settings = LoopSettings {
+        overlay,
+        heading,
+        plan: SessionPlan::default(),
+    };
+    let mut controller =
+        KernelController::new(KernelConfig::default(), settings).map_err(CliError::BadInput)?;
+    let mut counts = ClientCounts::default();
     let start = Instant::now();
     while start.elapsed() < duration {
-        match client
+        let outcome = client
             .run_cycle(&mut controller)
-            .map_err(|error| CliError::Internal(error.to_string()))?
-        {
-            CycleOutcome::Handled {
-                answered: sent,
-                fault,
-                ..
-            } => {
-                answered += u64::from(sent);
-                faults += u64::from(fault.is_some());
-            }
-            CycleOutcome::Rejected(_) => rejected += 1,
-            CycleOutcome::Stale => {}
-        }
+            .map_err(|error| CliError::Internal(error.to_string()))?;
+        counts.tally(&outcome);
     }
+    let record = controller.record();
     print_json(&json!({
         "fri_version": version.to_string(),
-        "answered": answered,
-        "rejected": rejected,
-        "faults": faults,
-        "stale": controller.stale_calls,
+        "overlay": format!("{overlay:?}"),
+        "client": counts_json(&counts),
+        "kernel_state": format!("{:?}", controller.kernel().state().kind()),
+        "kernel_steps": record.steps,
+        "stale_steps": record.stale_steps,
+        "missing_measurements": record.missing_measurements,
+        "inverse_failures": record.inverse_failures,
+        "overlay_lost_stops": record.overlay_lost_stops,
+        "events": record.events.iter().map(|(time, what)| json!({"time": time, "what": what})).collect::<Vec<_>>(),
+        "model": record.model.map(|m| json!({
+            "l1": m.upper_arm_length, "l2": m.forearm_length,
+            "shoulder": [m.shoulder.x, m.shoulder.z], "elbow": [m.elbow.x, m.elbow.z],
+        })),
+    }))
+}
+
+fn counts_json(counts: &ClientCounts) -> Value {
+    json!({
+        "handled": counts.handled,
+        "answered": counts.answered,
+        "rejected": counts.rejected,
+        "timeouts": counts.timeouts,
+        "duplicates": counts.duplicates,
+        "stale_datagrams": counts.stale_datagrams,
+        "gaps": counts.gaps,
+        "resynchronisations": counts.resynchronisations,
+        "session_faults": counts.session_faults,
+    })
+}
+
+/// Options of `limb kuka sim-controller`.
+struct SimOptions<'a> {
+    fri_version: &'a str,
+    client: SocketAddr,
+    port: u16,
+    cycles: u64,
+    send_period: u32,
+    overlay: &'a str,
+    faults: &'a str,
+    seed: u64,
+    unpaced: bool,
+    l1: f64,
+    l2: f64,
+}
+
+fn run_sim_controller(options: &SimOptions<'_>) -> Result<(), CliError> {
+    let version = parse_version(options.fri_version)?;
+    if !(1..=100).contains(&options.send_period) {
+        return Err(CliError::BadInput(format!(
+            "--send-period {}: 1..100 ms",
+            options.send_period
+        )));
+    }
+    let mut settings = SimSettings::new(version);
+    settings.send_period_ms = options.send_period;
+    settings.overlay = parse_overlay(options.overlay)?;
+    settings.pacing = if options.unpaced {
+        Pacing::AsFastAsPossible
+    } else {
+        Pacing::RealTime
+    };
+    settings.faults = parse_schedule(options.faults, options.seed)
+        .map_err(|error| CliError::BadInput(error.to_string()))?;
+    let mut plant = PlantParameters::new(options.l1, options.l2);
+    plant.check().map_err(CliError::BadInput)?;
+    plant.seed = options.seed;
+    let address = SocketAddr::from(([0, 0, 0, 0], options.port));
+    let mut sim = SimController::bind(address, options.client, settings, plant)
+        .map_err(|error| CliError::BadInput(format!("{address}: {error}")))?;
+    for _ in 0..options.cycles {
+        sim.run_cycle()
+            .map_err(|error| CliError::Internal(error.to_string()))?;
+    }
+    let stats = sim.stats();
+    let latency = stats.latency();
+    let truth = sim.plant().truth();
+    print_json(&json!({
+        "fri_version": version.to_string(),
+        "cycles": stats.cycles,
+        "state_cycles": {
+            "idle": stats.state_cycles[0],
+            "monitoring_wait": stats.state_cycles[1],
+            "monitoring_ready": stats.state_cycles[2],
+            "commanding_wait": stats.state_cycles[3],
+            "commanding_active": stats.state_cycles[4],
+        },
+        "datagrams_sent": stats.datagrams_sent,
+        "datagrams_dropped": stats.datagrams_dropped,
+        "garbage_sent": stats.garbage_sent,
+        "replies_on_time": stats.replies_on_time,
+        "missed_cycles": stats.missed_cycles,
+        "missed_with_delivery": stats.missed_with_delivery,
+        "stray_replies": stats.stray_replies,
+        "non_finite_replies": stats.non_finite_replies,
+        "overlay_aborts": stats.overlay_aborts,
+        "commanding_entries": stats.commanding_entries,
+        "max_entry_jump_rad": stats.max_entry_jump,
+        "round_trip_us": {
+            "samples": latency.samples,
+            "p50": latency.p50_us,
+            "p99": latency.p99_us,
+            "max": latency.max_us,
+        },
+        "truth": {
+            "l1": options.l1,
+            "l2": options.l2,
+            "shoulder": [truth.shoulder.x, truth.shoulder.z],
+        },
     }))
 }
 
@@ -124,7 +277,34 @@ pub fn run(command: KukaCommand) -> Result<(), CliError> {
             fri_version,
             port,
             seconds,
-        } => run_client(&fri_version, port, seconds),
+            overlay,
+            heading,
+        } => run_client(&fri_version, port, seconds, &overlay, heading),
+        KukaCommand::SimController {
+            fri_version,
+            client,
+            port,
+            cycles,
+            send_period,
+            overlay,
+            faults,
+            seed,
+            unpaced,
+            l1,
+            l2,
+        } => run_sim_controller(&SimOptions {
+            fri_version: &fri_version,
+            client,
+            port,
+            cycles,
+            send_period,
+            overlay: &overlay,
+            faults: &faults,
+            seed,
+            unpaced,
+            l1,
+            l2,
+        }),
     }
 }
 

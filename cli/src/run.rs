@@ -15,11 +15,12 @@
 //! plant integrates at its own 0.5 ms step in between.
 
 use crate::error::{emit, print_json, CliError};
-use limb_kernel::arm::JointAngles;
 use limb_kernel::geometry::Point;
 use limb_kernel::motion::SetPoint;
-use limb_kernel::trace::{Cause, Event, TraceEvent};
-use limb_kernel::{Command, Kernel, KernelConfig, PathSample, Request, StateKind};
+use limb_kernel::trace::{Cause, Event};
+use limb_kernel::{Kernel, KernelConfig, PathSample, Request, StateKind};
+pub use limb_sim::operator::SessionPlan;
+use limb_sim::operator::{completes_session, describe, FittedModel, Operator};
 use serde::Serialize;
 
 /// A plant the kernel can close the loop on.
@@ -46,36 +47,6 @@ pub struct Truth {
     pub elbow: [f64; 2],
     /// Shoulder [m].
     pub shoulder: [f64; 2],
-}
-
-/// How the session is run.
-#[derive(Clone, Copy, Debug)]
-pub struct SessionPlan {
-    /// Kernel rate [Hz].
-    pub rate: f64,
-    /// Rest before the estimation starts [s].
-    pub settle: f64,
-    /// Manipulation target.
-    pub target: JointAngles,
-    /// How long the target is held before finishing [s].
-    pub hold: f64,
-    /// Give up after this long [s].
-    pub timeout: f64,
-}
-
-impl Default for SessionPlan {
-    fn default() -> Self {
-        Self {
-            rate: 1000.0,
-            settle: 0.1,
-            target: JointAngles {
-                shoulder_elevation: 1.0,
-                elbow_flexion: 0.6,
-            },
-            hold: 1.0,
-            timeout: 120.0,
-        }
-    }
 }
 
 /// One line of the session's record.
@@ -127,23 +98,6 @@ pub struct SessionReport {
     pub steps: u64,
 }
 
-fn describe(event: &TraceEvent) -> String {
-    match event.event {
-        Event::Transition { from, to, cause } => {
-            let why = match cause {
-                Cause::Request(request) => format!("request {request:?}"),
-                Cause::ModelValidated => "model validated".into(),
-                Cause::Stop(reason) => format!("stop: {reason:?}"),
-            };
-            format!("{from:?} → {to:?} ({why})")
-        }
-        Event::Refused(refusal) => format!(
-            "refused {:?} in {:?}: {:?}",
-            refusal.request, refusal.state, refusal.reason
-        ),
-    }
-}
-
 /// Runs one session of `kernel` on `plant` following `plan`.
 pub fn run_session(
     kernel: &mut Kernel,
@@ -161,40 +115,18 @@ pub fn run_session(
         saturated_commands: 0,
         steps: 0,
     };
-    let mut asked_start = false;
-    let mut asked_approve = false;
-    let mut reached_target_at: Option<f64> = None;
-    let mut last: Option<Command> = None;
+    let mut operator = Operator::new(*plan);
     while plant.time() < plan.timeout {
         let frame = plant.measure();
         let now = frame.time;
-        let state = kernel.state().kind();
-        let request = match state {
-            StateKind::Grasp if !asked_start && now >= plan.settle => {
-                asked_start = true;
-                Some(Request::StartEstimation)
-            }
-            StateKind::Validated if !asked_approve => {
-                asked_approve = true;
+        let request = operator.request(kernel.state().kind(), now);
+        if let Some(request) = request {
+            if matches!(request, Request::ApproveManipulation(_)) {
                 report.model = kernel
                     .state()
                     .arm()
                     .map(|arm| model_report(arm, &report.truth));
-                Some(Request::ApproveManipulation(plan.target))
             }
-            StateKind::Manipulate => {
-                let still = last
-                    .and_then(|c| c.set_point)
-                    .is_some_and(|s| s.velocity.linear_speed() == 0.0 && s.velocity.psi == 0.0);
-                let since = *reached_target_at.get_or_insert(now);
-                if !still {
-                    reached_target_at = None;
-                }
-                (still && now - since >= plan.hold).then_some(Request::FinishManipulation)
-            }
-            _ => None,
-        };
-        if let Some(request) = request {
             let _ = kernel.request(request, now);
         }
         let command = kernel.step(&frame, now);
@@ -212,17 +144,10 @@ pub fn run_session(
             {
                 report.monitor_events.push(line.clone());
             }
-            if let Event::Transition {
-                from: StateKind::Manipulate,
-                to: StateKind::Validated,
-                ..
-            } = event.event
-            {
-                report.completed = true;
-            }
+            report.completed |= completes_session(&event);
             report.events.push(line);
         }
-        last = Some(command);
+        operator.observe(command);
         if report.completed || command.state == StateKind::SafeStop {
             break;
         }
@@ -233,17 +158,17 @@ pub fn run_session(
 }
 
 fn model_report(arm: &limb_kernel::validate::ValidatedArm, truth: &Truth) -> ModelReport {
-    let e = arm.estimate();
-    let g = arm.geometry();
-    let shoulder = g.shoulder();
+    let model = FittedModel::of(arm);
     ModelReport {
-        l1: g.upper_arm_length(),
-        l2: g.forearm_length(),
-        shoulder: [shoulder.x, shoulder.z],
-        elbow: [e.elbow.x, e.elbow.z],
-        error_l1: g.upper_arm_length() - truth.l1,
-        error_l2: g.forearm_length() - truth.l2,
-        error_shoulder: shoulder.distance(Point::new(truth.shoulder[0], truth.shoulder[1])),
+        l1: model.upper_arm_length,
+        l2: model.forearm_length,
+        shoulder: [model.shoulder.x, model.shoulder.z],
+        elbow: [model.elbow.x, model.elbow.z],
+        error_l1: model.upper_arm_length - truth.l1,
+        error_l2: model.forearm_length - truth.l2,
+        error_shoulder: model
+            .shoulder
+            .distance(Point::new(truth.shoulder[0], truth.shoulder[1])),
     }
 }
 
@@ -316,16 +241,7 @@ impl ClosedLoopPlant for ReferencePlant {
     }
 
     fn advance(&mut self, set_point: Option<&SetPoint>, duration: f64) {
-        if let Some(set_point) = set_point {
-            self.0.set(*set_point);
-        } else {
-            let held = self.0.set_point().pose;
-            self.0.set(SetPoint::hold(held));
-        }
-        let end = self.0.time() + duration - limb_sim::STEP / 2.0;
-        while self.0.time() < end {
-            self.0.step();
-        }
+        limb_sim::closed_loop::advance(&mut self.0, set_point, duration);
     }
 
     fn truth(&self) -> Truth {

@@ -1,88 +1,56 @@
-//! Loop-latency harness: a robot-side sender paces COMMANDING_ACTIVE
-//! monitoring messages at 1 kHz over loopback UDP to an `FriClient` with a
-//! hold controller, and measures the round trip (send → reply received).
-//! Prints p50 / p99 / max (µs) and missed cycles (reply later than 1 ms or none).
+//! Loop-latency harness: the simulated FRI controller paced at a 1 ms send
+//! period (real time) and the FRI client with the kernel inside, over
+//! loopback UDP, for SECONDS (≥ 60 s for the README figures). The kernel
+//! runs the whole session (estimation motion, manipulation, hold). Round
+//! trip = monitoring datagram sent → its reply received by the controller
+//! (includes the kernel's step, kinematics and both codecs); a missed cycle
+//! = no reply before the next send tick.
 //!
-//! `cargo run --release -p limb-kuka --example loop_latency -- [SECONDS] [VERSION]`
+//! `cargo run --release -p limb-kuka --example loop_latency -- [SECONDS] [VERSION] [joint|wrench]`
 
-use std::net::UdpSocket;
-use std::thread;
-use std::time::{Duration, Instant};
-
-use limb_kuka::messages::SessionState;
-use limb_kuka::session::{CommandIntent, Controller, MonitoringView};
-use limb_kuka::udp::{CycleOutcome, FriClient};
-use limb_kuka::vectors::example_monitoring;
-use limb_kuka::{encode_monitoring, FriVersion};
-
-/// Send period (1 kHz).
-const PERIOD: Duration = Duration::from_millis(1);
-
-struct Hold;
-impl Controller for Hold {
-    fn on_monitoring(&mut self, _view: &MonitoringView, _now: f64) -> CommandIntent {
-        CommandIntent::Hold
-    }
-    fn on_link_stale(&mut self, _silent_for: f64, _now: f64) {}
-}
+use limb_kuka::kernel_controller::Overlay;
+use limb_kuka::loopback::run_reference_session;
+use limb_kuka::sim_controller::{Pacing, SimSettings};
+use limb_kuka::FriVersion;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
-    let seconds: f64 = args.next().map_or(Ok(5.0), |text| text.parse())?;
+    let seconds: f64 = args.next().map_or(Ok(60.0), |text| text.parse())?;
     let version: FriVersion = args
         .next()
         .map_or(Ok(FriVersion::V1_15), |text| text.parse())?;
-    let mut client = FriClient::bind(
-        "127.0.0.1:0".parse()?,
-        version,
-        0.01,
-        Duration::from_millis(200),
-    )?;
-    let client_address = client.local_addr()?;
-    let client_thread = thread::spawn(move || {
-        while let Ok(CycleOutcome::Handled { .. } | CycleOutcome::Rejected(_)) =
-            client.run_cycle(&mut Hold)
-        {}
-    });
-    let robot = UdpSocket::bind("127.0.0.1:0")?;
-    robot.set_read_timeout(Some(PERIOD))?;
-    let mut message = example_monitoring(SessionState::CommandingActive, version);
-    let cycles = (seconds * 1000.0) as u32;
-    let mut round_trips_us = Vec::with_capacity(cycles as usize);
-    let mut missed = 0u32;
-    let mut buffer = [0u8; 1500];
-    let start = Instant::now();
-    for cycle in 0..cycles {
-        let due = start + PERIOD * cycle;
-        if let Some(wait) = due.checked_duration_since(Instant::now()) {
-            thread::sleep(wait);
-        }
-        message.header.sequence_counter = cycle;
-        let sent = Instant::now();
-        robot.send_to(&encode_monitoring(&message, version)?, client_address)?;
-        match robot.recv_from(&mut buffer) {
-            Ok(_) => {
-                let round_trip = sent.elapsed();
-                missed += u32::from(round_trip > PERIOD);
-                round_trips_us.push(round_trip.as_secs_f64() * 1e6);
-            }
-            Err(_) => missed += 1,
-        }
-    }
-    drop(robot);
-    client_thread.join().map_err(|_| "client thread panicked")?;
-    round_trips_us.sort_by(f64::total_cmp);
-    let percentile = |p: f64| {
-        round_trips_us
-            .get(((round_trips_us.len() as f64 - 1.0) * p) as usize)
-            .copied()
-            .unwrap_or(f64::NAN)
+    let overlay = match args.next().as_deref() {
+        None | Some("joint") => Overlay::JointPosition,
+        Some("wrench") => Overlay::Wrench,
+        Some(other) => return Err(format!("overlay `{other}`: joint or wrench").into()),
     };
+    let mut sim = SimSettings::new(version);
+    sim.pacing = Pacing::RealTime;
+    sim.overlay = overlay;
+    let cycles = (seconds * 1000.0).round() as u64;
+    let started = std::time::Instant::now();
+    let run = run_reference_session(sim, cycles, |_, _| false)?;
+    let wall = started.elapsed().as_secs_f64();
+    let stats = run.sim.stats();
+    let latency = stats.latency();
+    let record = run.controller.record();
     println!(
-        "FRI {version}, {cycles} cycles at 1 kHz: round trip p50 {:.1} us, p99 {:.1} us, max {:.1} us; missed {missed}",
-        percentile(0.5),
-        percentile(0.99),
-        percentile(1.0)
+        "FRI {version} {overlay:?}, {} cycles at 1 kHz in {wall:.1} s wall: round trip p50 {:.0} us, \
+         p99 {:.0} us, max {:.0} us; missed {} (of which {} answered late); \
+         commanding cycles {}; kernel {:?}, steps {}, events {:?}",
+        stats.cycles,
+        latency.p50_us,
+        latency.p99_us,
+        latency.max_us,
+        stats.missed_cycles,
+        stats.late_replies,
+        stats.state_cycles[4],
+        run.controller.kernel().state().kind(),
+        record.steps,
+        record.events,
     );
+    if let Some(model) = record.model {
+        println!("model: {model:?}");
+    }
     Ok(())
 }

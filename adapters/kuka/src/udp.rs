@@ -12,7 +12,7 @@ use crate::codec::{
     decode_monitoring, encode_command, DecodeError, EncodeError, MAX_DATAGRAM_BYTES,
 };
 use crate::messages::SessionState;
-use crate::session::{ClientSession, Controller, SessionFault};
+use crate::session::{ClientSession, Controller, SequenceCheck, SessionFault};
 use crate::version::FriVersion;
 
 /// A failure of the client's own I/O or encoding.
@@ -37,10 +37,16 @@ pub enum CycleOutcome {
         answered: bool,
         /// A fault of this cycle.
         fault: Option<SessionFault>,
+        /// The sequence-counter check (duplicates and stale datagrams are
+        /// dropped: not answered, controller not called).
+        sequence: SequenceCheck,
     },
-    /// A datagram was not a valid monitoring message; nothing sent.
+    /// A datagram was not a valid monitoring message; nothing sent (the
+    /// controller is told the link is stale if it has been silent for a
+    /// receive timeout).
     Rejected(DecodeError),
-    /// No datagram within the receive timeout; the controller was told.
+    /// No datagram within the receive timeout; the controller was told
+    /// (`on_link_stale` with the time since the last handled message).
     Stale,
 }
 
@@ -52,6 +58,7 @@ pub struct FriClient {
     session: ClientSession,
     start: Instant,
     last_receive: Instant,
+    receive_timeout: Duration,
     buffer: [u8; MAX_DATAGRAM_BYTES + 1],
 }
 
@@ -68,7 +75,8 @@ impl FriClient {
         receive_timeout: Duration,
     ) -> Result<Self, ClientError> {
         let socket = UdpSocket::bind(address)?;
-        socket.set_read_timeout(Some(receive_timeout.max(Duration::from_micros(1))))?;
+        let receive_timeout = receive_timeout.max(Duration::from_micros(1));
+        socket.set_read_timeout(Some(receive_timeout))?;
         let now = Instant::now();
         Ok(Self {
             socket,
@@ -76,6 +84,7 @@ impl FriClient {
             session: ClientSession::new(version, max_joint_step),
             start: now,
             last_receive: now,
+            receive_timeout,
             buffer: [0; MAX_DATAGRAM_BYTES + 1],
         })
     }
@@ -105,11 +114,7 @@ impl FriClient {
                     std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
                 ) =>
             {
-                let now = Instant::now();
-                controller.on_link_stale(
-                    now.duration_since(self.last_receive).as_secs_f64(),
-                    now.duration_since(self.start).as_secs_f64(),
-                );
+                self.tell_if_stale(controller, Instant::now());
                 return Ok(CycleOutcome::Stale);
             }
             Err(error) => return Err(error.into()),
@@ -117,15 +122,22 @@ impl FriClient {
         let datagram = self.buffer.get(..length).unwrap_or_default();
         let message = match decode_monitoring(datagram, self.version) {
             Ok(message) => message,
-            Err(error) => return Ok(CycleOutcome::Rejected(error)),
+            Err(error) => {
+                self.tell_if_stale(controller, Instant::now());
+                return Ok(CycleOutcome::Rejected(error));
+            }
         };
         let now = Instant::now();
-        self.last_receive = now;
         let reply = self.session.on_monitoring(
             &message,
             controller,
             now.duration_since(self.start).as_secs_f64(),
         );
+        if reply.sequence.is_handled() {
+            self.last_receive = now;
+        } else {
+            self.tell_if_stale(controller, now);
+        }
         let state = ClientSession::view(&message).session_state;
         let answered = reply.command.is_some();
         if let Some(command) = reply.command {
@@ -136,6 +148,20 @@ impl FriClient {
             state,
             answered,
             fault: reply.fault,
+            sequence: reply.sequence,
         })
+    }
+
+    /// Tells the controller the link is stale when no monitoring message
+    /// was handled for a receive timeout or longer (a stream of garbage,
+    /// duplicates or stale datagrams does not keep the link alive).
+    fn tell_if_stale(&self, controller: &mut impl Controller, now: Instant) {
+        let silent_for = now.duration_since(self.last_receive);
+        if silent_for >= self.receive_timeout {
+            controller.on_link_stale(
+                silent_for.as_secs_f64(),
+                now.duration_since(self.start).as_secs_f64(),
+            );
+        }
     }
 }

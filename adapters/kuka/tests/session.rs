@@ -92,27 +92,35 @@ fn counters_start_at_zero_and_reflect() {
     }
 }
 
-#[test]
-fn answers_every_receive_multiplier_th_message() {
-    let mut session = ClientSession::new(FriVersion::V2_5, 0.01);
-    let answered: Vec<bool> = (0..6)
+/// Which of the MONITORING_READY messages with `counters` were answered.
+fn answered(
+    session: &mut ClientSession,
+    controller: &mut impl Controller,
+    counters: impl IntoIterator<Item = u32>,
+    multiplier: u32,
+) -> Vec<bool> {
+    counters
+        .into_iter()
         .map(|counter| {
+            let message = monitoring(
+                SessionState::MonitoringReady,
+                ConnectionQuality::Good,
+                counter,
+                multiplier,
+            );
             session
-                .on_monitoring(
-                    &monitoring(
-                        SessionState::MonitoringReady,
-                        ConnectionQuality::Good,
-                        counter,
-                        3,
-                    ),
-                    &mut Fixed(CommandIntent::Hold),
-                    0.0,
-                )
+                .on_monitoring(&message, controller, 0.0)
                 .command
                 .is_some()
         })
-        .collect();
-    assert_eq!(answered, [false, false, true, false, false, true]);
+        .collect()
+}
+
+#[test]
+fn answers_every_receive_multiplier_th_message() {
+    let mut session = ClientSession::new(FriVersion::V2_5, 0.01);
+    let pattern = answered(&mut session, &mut Fixed(CommandIntent::Hold), 0..6, 3);
+    assert_eq!(pattern, [false, false, true, false, false, true]);
 }
 
 #[test]
@@ -199,4 +207,111 @@ fn poor_quality_holds() {
         0.0,
     );
     assert_eq!(sent_position(&reply).unwrap(), IPO.to_vec());
+}
+
+fn wrench_monitoring(state: SessionState, counter: u32) -> FriMonitoringMessage {
+    let mut message = monitoring(state, ConnectionQuality::Excellent, counter, 1);
+    if let Some(ipo) = message.ipo_data.as_mut() {
+        ipo.client_command_mode = Some(ClientCommandMode::Wrench as i32);
+        ipo.joint_position = None;
+    }
+    message
+}
+
+fn sent_wrench(reply: &SessionReply) -> Option<Vec<f64>> {
+    reply
+        .command
+        .as_ref()?
+        .command_data
+        .as_ref()?
+        .cartesian_wrench_feed_forward
+        .as_ref()
+        .map(|w| w.element.clone())
+}
+
+#[test]
+fn sequence_check_classifies_counters_with_wrap() {
+    use SequenceCheck::*;
+    assert_eq!(SequenceCheck::classify(None, 7), First);
+    assert_eq!(SequenceCheck::classify(Some(u32::MAX), 0), InOrder);
+    assert_eq!(SequenceCheck::classify(Some(5), 5), Duplicate);
+    assert_eq!(SequenceCheck::classify(Some(5), 3), Stale { behind: 2 });
+    assert_eq!(
+        SequenceCheck::classify(Some(u32::MAX - 1), 2),
+        Gap { missed: 3 }
+    );
+    assert_eq!(SequenceCheck::classify(Some(5000), 0), Resynchronised);
+}
+
+#[test]
+fn duplicates_and_stale_datagrams_are_dropped_without_calling_the_controller() {
+    struct Counting(u32);
+    impl Controller for Counting {
+        fn on_monitoring(&mut self, _view: &MonitoringView, _now: f64) -> CommandIntent {
+            self.0 += 1;
+            CommandIntent::Hold
+        }
+        fn on_link_stale(&mut self, _silent_for: f64, _now: f64) {}
+    }
+    let mut session = ClientSession::new(FriVersion::V1_15, 0.01);
+    let mut controller = Counting(0);
+    let pattern = answered(&mut session, &mut controller, [10, 10, 12, 11, 13], 1);
+    assert_eq!(pattern, [true, false, true, false, true]);
+    assert_eq!(controller.0, 3);
+}
+
+#[test]
+fn controller_runs_in_idle_but_nothing_is_sent() {
+    struct Seen(Vec<SessionState>);
+    impl Controller for Seen {
+        fn on_monitoring(&mut self, view: &MonitoringView, _now: f64) -> CommandIntent {
+            self.0.push(view.session_state);
+            CommandIntent::Hold
+        }
+        fn on_link_stale(&mut self, _silent_for: f64, _now: f64) {}
+    }
+    let mut session = ClientSession::new(FriVersion::V2_5, 0.01);
+    let mut seen = Seen(Vec::new());
+    let reply = session.on_monitoring(
+        &monitoring(SessionState::Idle, ConnectionQuality::Poor, 1, 1),
+        &mut seen,
+        0.0,
+    );
+    assert!(reply.command.is_none());
+    assert_eq!(seen.0, [SessionState::Idle]);
+}
+
+#[test]
+fn wrench_mode_sends_the_wrench_with_the_measured_position() {
+    let mut session = ClientSession::new(FriVersion::V2_7, 0.01);
+    let wrench = [1.0, -2.0, 3.0, 0.1, 0.2, 0.3];
+    let mut controller = Fixed(CommandIntent::Wrench(wrench));
+    let wait = session.on_monitoring(
+        &wrench_monitoring(SessionState::CommandingWait, 0),
+        &mut controller,
+        0.0,
+    );
+    assert_eq!(sent_wrench(&wait).unwrap(), [0.0; 6]);
+    assert_eq!(sent_position(&wait).unwrap(), IPO.to_vec());
+    let active = session.on_monitoring(
+        &wrench_monitoring(SessionState::CommandingActive, 1),
+        &mut controller,
+        0.001,
+    );
+    assert_eq!(sent_wrench(&active).unwrap(), wrench.to_vec());
+    assert_eq!(sent_position(&active).unwrap(), IPO.to_vec());
+    let bad = session.on_monitoring(
+        &wrench_monitoring(SessionState::CommandingActive, 2),
+        &mut Fixed(CommandIntent::Wrench([f64::NAN; 6])),
+        0.002,
+    );
+    assert_eq!(sent_wrench(&bad).unwrap(), [0.0; 6]);
+    assert_eq!(bad.fault, Some(SessionFault::NonFiniteIntent));
+    let mismatch = session.on_monitoring(
+        &wrench_monitoring(SessionState::CommandingActive, 3),
+        &mut Fixed(CommandIntent::JointPosition(IPO)),
+        0.003,
+    );
+    assert_eq!(sent_wrench(&mismatch).unwrap(), [0.0; 6]);
+    assert_eq!(mismatch.fault, Some(SessionFault::ModeMismatch));
 }

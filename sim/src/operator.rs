@@ -1,0 +1,163 @@
+//! The operator of a closed-loop session: the requests a person makes of
+//! the kernel while it runs on a robot (the reference plant in `limb run`,
+//! a KUKA arm behind FRI in `limb kuka run`).
+//!
+//! Theory of operation: once per kernel step, [`Operator::request`] looks
+//! at the kernel's state and time and returns at most one request: start
+//! the estimation once the grasp has settled, approve the manipulation
+//! target once the kernel is in Validated, finish once the target has been
+//! held still for [`SessionPlan::hold`]. [`Operator::observe`] records each
+//! step's command (the stillness test needs it). [`describe`] puts a trace
+//! event into words; [`FittedModel`] is the validated arm in numbers.
+
+use limb_kernel::arm::JointAngles;
+use limb_kernel::geometry::Point;
+use limb_kernel::trace::{Cause, Event, TraceEvent};
+use limb_kernel::validate::ValidatedArm;
+use limb_kernel::{Command, Request, StateKind};
+
+/// How the session is run.
+#[derive(Clone, Copy, Debug)]
+pub struct SessionPlan {
+    /// Kernel rate [Hz].
+    pub rate: f64,
+    /// Rest before the estimation starts [s].
+    pub settle: f64,
+    /// Manipulation target.
+    pub target: JointAngles,
+    /// How long the target is held before finishing [s].
+    pub hold: f64,
+    /// Give up after this long [s].
+    pub timeout: f64,
+}
+
+impl Default for SessionPlan {
+    fn default() -> Self {
+        Self {
+            rate: 1000.0,
+            settle: 0.1,
+            target: JointAngles {
+                shoulder_elevation: 1.0,
+                elbow_flexion: 0.6,
+            },
+            hold: 1.0,
+            timeout: 120.0,
+        }
+    }
+}
+
+/// The arm model the kernel validated, frame S.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FittedModel {
+    /// Upper-arm length l1 [m].
+    pub upper_arm_length: f64,
+    /// Forearm length l2 [m].
+    pub forearm_length: f64,
+    /// Shoulder [m].
+    pub shoulder: Point,
+    /// Elbow at t = 0 [m].
+    pub elbow: Point,
+}
+
+impl FittedModel {
+    /// The model of `arm`.
+    pub fn of(arm: &ValidatedArm) -> Self {
+        let geometry = arm.geometry();
+        Self {
+            upper_arm_length: geometry.upper_arm_length(),
+            forearm_length: geometry.forearm_length(),
+            shoulder: geometry.shoulder(),
+            elbow: arm.estimate().elbow,
+        }
+    }
+}
+
+/// The operator's memory across steps.
+#[derive(Clone, Debug)]
+pub struct Operator {
+    plan: SessionPlan,
+    asked_start: bool,
+    asked_approve: bool,
+    reached_target_at: Option<f64>,
+    last: Option<Command>,
+}
+
+impl Operator {
+    /// An operator following `plan`.
+    pub fn new(plan: SessionPlan) -> Self {
+        Self {
+            plan,
+            asked_start: false,
+            asked_approve: false,
+            reached_target_at: None,
+            last: None,
+        }
+    }
+
+    /// The plan.
+    pub fn plan(&self) -> &SessionPlan {
+        &self.plan
+    }
+
+    /// The request to make at kernel time `now` [s] in `state`, if any
+    /// (each of start and approve is asked once).
+    pub fn request(&mut self, state: StateKind, now: f64) -> Option<Request> {
+        match state {
+            StateKind::Grasp if !self.asked_start && now >= self.plan.settle => {
+                self.asked_start = true;
+                Some(Request::StartEstimation)
+            }
+            StateKind::Validated if !self.asked_approve => {
+                self.asked_approve = true;
+                Some(Request::ApproveManipulation(self.plan.target))
+            }
+            StateKind::Manipulate => {
+                let still = self
+                    .last
+                    .and_then(|c| c.set_point)
+                    .is_some_and(|s| s.velocity.linear_speed() == 0.0 && s.velocity.psi == 0.0);
+                let since = *self.reached_target_at.get_or_insert(now);
+                if !still {
+                    self.reached_target_at = None;
+                }
+                (still && now - since >= self.plan.hold).then_some(Request::FinishManipulation)
+            }
+            _ => None,
+        }
+    }
+
+    /// Records the command of the step just taken.
+    pub fn observe(&mut self, command: Command) {
+        self.last = Some(command);
+    }
+}
+
+/// A trace event in words.
+pub fn describe(event: &TraceEvent) -> String {
+    match event.event {
+        Event::Transition { from, to, cause } => {
+            let why = match cause {
+                Cause::Request(request) => format!("request {request:?}"),
+                Cause::ModelValidated => "model validated".into(),
+                Cause::Stop(reason) => format!("stop: {reason:?}"),
+            };
+            format!("{from:?} → {to:?} ({why})")
+        }
+        Event::Refused(refusal) => format!(
+            "refused {:?} in {:?}: {:?}",
+            refusal.request, refusal.state, refusal.reason
+        ),
+    }
+}
+
+/// True when `event` ends a whole session: Manipulate → Validated.
+pub fn completes_session(event: &TraceEvent) -> bool {
+    matches!(
+        event.event,
+        Event::Transition {
+            from: StateKind::Manipulate,
+            to: StateKind::Validated,
+            ..
+        }
+    )
+}
