@@ -492,31 +492,28 @@ impl Model for ArmModel {
         let measurement_side = MEASUREMENT_SIDE.contains(&c.name);
         match (c.name, c.parameters.as_slice()) {
             ("active_torque", [amp, freq]) => {
-                // The cost is periodic-multimodal in the frequency: start
-                // at the residual's spectral peak (when one stands out) and
-                // on a log-spaced comb wide enough to catch a torque whose
-                // response is not a clean band.
-                let mut starts: Vec<Vec<f64>> = hints
-                    .frequency
-                    .map(|f| {
-                        // The interpolated peak is good to a fraction of
-                        // 1/duration; the phase over the whole log needs
-                        // better, so seven starts ±0.12 % around it.
-                        (-3..=3)
-                            .flat_map(|k| {
-                                let fu = freq.unit_of(f * (1.0 + 0.0004 * f64::from(k)));
-                                [0.1, 0.4, 1.5].map(|a| vec![amp.unit_of(a), fu])
-                            })
-                            .collect()
-                    })
-                    .unwrap_or_default();
-                for k in 0..12 {
-                    let f = 0.1 * 50f64.powf(k as f64 / 11.0);
-                    for a in [0.1, 0.6] {
-                        starts.push(vec![amp.unit_of(a), freq.unit_of(f)]);
-                    }
+                // The cost is periodic-multimodal in the frequency, with
+                // a valley about 1 / (duration · 10) wide. With a spectral
+                // peak in the residual: a comb of 81 starts ±2 % around it
+                // (a strong torque on an arm that touches the table shifts
+                // the peak off the torque's frequency), at one amplitude —
+                // the best frequency hardly depends on it, and the
+                // refinement walks the amplitude. Without one: a
+                // log-spaced comb over 0.1-5 Hz at two amplitudes.
+                match hints.frequency {
+                    Some(f) => (-40..=40)
+                        .map(|k| {
+                            let fu = freq.unit_of(f * (1.0 + 0.0005 * f64::from(k)));
+                            vec![amp.unit_of(0.5), fu]
+                        })
+                        .collect(),
+                    None => (0..12)
+                        .flat_map(|k| {
+                            let fu = freq.unit_of(0.1 * 50f64.powf(f64::from(k) / 11.0));
+                            [0.1, 0.6].map(|a| vec![amp.unit_of(a), fu])
+                        })
+                        .collect(),
                 }
-                starts
             }
             ("grasp_slip", [shift, at]) => match hints.onset {
                 Some(onset) => [0.0, 0.15, 0.3]

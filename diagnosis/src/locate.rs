@@ -125,14 +125,22 @@ pub fn locate(model: &dyn Model, residual: &Series) -> (Location, Hints) {
         location.t_end = Some(times[last]);
         hints.onset = Some(times[first]);
     }
-    let bands: Vec<(f64, [f64; 2], f64)> = named
+    let spectra: Vec<Spectrum> = named
         .iter()
         .take(2)
-        .filter_map(|s| band(&residual.column(*s), interval))
+        .filter_map(|s| spectrum(&residual.column(*s), interval))
         .collect();
-    if let Some(strongest) = bands.iter().max_by(|a, b| a.2.total_cmp(&b.2)) {
-        hints.frequency = Some(strongest.0);
-        location.band_hz = Some(strongest.1);
+    // The fit of a periodic effect starts at the strongest signal's peak
+    // even when it is not a clean band (a strong torque on an arm that
+    // touches the table answers with harmonics too).
+    hints.frequency = spectra.first().map(|s| s.peak);
+    if let Some(strongest) = spectra
+        .iter()
+        .filter(|s| s.stands_out)
+        .max_by(|a, b| a.share.total_cmp(&b.share))
+    {
+        hints.frequency = Some(strongest.peak);
+        location.band_hz = Some(strongest.band);
     }
     (location, hints)
 }
@@ -147,9 +155,23 @@ fn median_interval(times: &[f64]) -> f64 {
     d[d.len() / 2]
 }
 
-/// The spectral band of `signal` sampled every `interval` seconds:
-/// (peak frequency, [low, high], share of power), when one stands out.
-fn band(signal: &[f64], interval: f64) -> Option<(f64, [f64; 2], f64)> {
+/// The spectral peak of a residual above [`LOWEST_BAND`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Spectrum {
+    /// Interpolated peak frequency [Hz].
+    peak: f64,
+    /// Bins around the peak above a quarter of it [Hz].
+    band: [f64; 2],
+    /// Share of the residual's power in the band.
+    share: f64,
+    /// The band holds [`BAND_SHARE`] and its peak stands 10× above the
+    /// median bin: it is reported.
+    stands_out: bool,
+}
+
+/// The spectrum of `signal` sampled every `interval` seconds (`None` for
+/// too short a signal or no power).
+fn spectrum(signal: &[f64], interval: f64) -> Option<Spectrum> {
     let n = signal.len();
     if n < 16 || interval.is_nan() || interval <= 0.0 {
         return None;
@@ -206,16 +228,17 @@ fn band(signal: &[f64], interval: f64) -> Option<(f64, [f64; 2], f64)> {
         _ => 0.0,
     };
     let share = power[lo..=hi].iter().sum::<f64>() / total;
-    (share >= BAND_SHARE && peak_power > 10.0 * median).then_some((
-        (peak as f64 + offset) * resolution,
-        [lo as f64 * resolution, hi as f64 * resolution],
+    Some(Spectrum {
+        peak: (peak as f64 + offset) * resolution,
+        band: [lo as f64 * resolution, hi as f64 * resolution],
         share,
-    ))
+        stands_out: share >= BAND_SHARE && peak_power > 10.0 * median,
+    })
 }
 
 #[cfg(test)]
 mod tests {
-    use super::band;
+    use super::spectrum;
 
     #[test]
     fn finds_a_sinusoid_and_ignores_a_slow_drift() {
@@ -223,9 +246,11 @@ mod tests {
         let sine: Vec<f64> = (0..3000)
             .map(|i| (2.0 * std::f64::consts::PI * 1.3 * i as f64 * interval).sin())
             .collect();
-        let (peak, [lo, hi], share) = band(&sine, interval).unwrap();
-        assert!((peak - 1.3).abs() < 0.002 && lo <= 1.3 && 1.3 <= hi && share > 0.8);
+        let s = spectrum(&sine, interval).unwrap();
+        let [lo, hi] = s.band;
+        assert!((s.peak - 1.3).abs() < 0.002 && lo <= 1.3 && 1.3 <= hi && s.share > 0.8);
+        assert!(s.stands_out);
         let drift: Vec<f64> = (0..3000).map(|i| (i as f64 * interval).powi(2)).collect();
-        assert!(band(&drift, interval).is_none());
+        assert!(!spectrum(&drift, interval).unwrap().stands_out);
     }
 }
