@@ -193,3 +193,79 @@ fn the_blind_self_check_is_seeded_and_reports_its_figures() {
     let again: serde_json::Value = serde_json::from_slice(&run().stdout).unwrap();
     assert_eq!(&again["cases"], cases, "same seed, same logs and answers");
 }
+
+/// The report renders in a real browser: headless Chromium (Debian
+/// package `chromium`, installed by `.ci/run` when it can be) parses it
+/// into a DOM with one chart per located signal and takes a screenshot.
+/// Without Chromium the test says so and checks nothing more.
+#[test]
+fn the_report_renders_in_headless_chromium() {
+    let Ok(chromium) = which("chromium") else {
+        eprintln!(
+            "chromium is not installed: report rendering not checked (apt-get install chromium)"
+        );
+        return;
+    };
+    let report = scratch("slip.html");
+    let log = format!("{EFFECTS}/grasp_slip.csv");
+    let out = limb(&[
+        "diagnose",
+        &log,
+        "--l1",
+        "0.3",
+        "--l2",
+        "0.18",
+        "--report",
+        report.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(0));
+    let url = format!("file://{}", report.display());
+    let browser = |extra: &[&str]| {
+        Command::new(&chromium)
+            .args([
+                "--headless",
+                "--no-sandbox",
+                "--disable-gpu",
+                "--hide-scrollbars",
+            ])
+            .args(extra)
+            .arg(&url)
+            .output()
+            .expect("run chromium")
+    };
+    let dom = String::from_utf8_lossy(&browser(&["--dump-dom"]).stdout).into_owned();
+    // Six located signals: a trace chart and a residual chart each.
+    assert_eq!(
+        dom.matches("<svg").count(),
+        12,
+        "{}",
+        &dom[..dom.len().min(400)]
+    );
+    assert!(dom.matches("<polyline").count() >= 30);
+    let png = scratch("slip.png");
+    let shot = browser(&[
+        "--window-size=1000,1400",
+        &format!("--screenshot={}", png.display()),
+    ]);
+    assert!(
+        shot.status.success(),
+        "{}",
+        String::from_utf8_lossy(&shot.stderr)
+    );
+    let bytes = std::fs::read(&png).unwrap();
+    assert_eq!(&bytes[1..4], b"PNG");
+    assert!(
+        bytes.len() > 20_000,
+        "a blank page is small: {} bytes",
+        bytes.len()
+    );
+}
+
+fn which(program: &str) -> Result<std::path::PathBuf, ()> {
+    std::env::var_os("PATH")
+        .iter()
+        .flat_map(std::env::split_paths)
+        .map(|dir| dir.join(program))
+        .find(|path| path.is_file())
+        .ok_or(())
+}

@@ -1,29 +1,57 @@
-//! Diagnoses every labelled log of `../shared/data/effects/` and prints
-//! the ranking head, the gap and the time taken.
-use limb_diagnosis::arm::ArmModel;
-use limb_diagnosis::{select, HoldOut, Options, Problem};
+//! Diagnoses every labelled log of `shared/data/effects/` (the
+//! independent implementation's) and prints a Markdown table: answer,
+//! fitted parameters against the label, held-out gap, where, wall time.
+//!
+//! `cargo run --release -p limb-diagnosis --example shared_effects`
+
+use limb_diagnosis::verdict::diagnose;
+use std::path::Path;
 use std::time::Instant;
 
-fn main() {
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/effects");
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/effects");
     let labels: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("labels.json")).unwrap()).unwrap();
-    for label in labels.as_array().unwrap() {
-        let file = label["file"].as_str().unwrap();
-        let records = limb_sim::log::read(&dir.join(file)).unwrap();
-        let (l1, l2) = (label["l1"].as_f64().unwrap(), label["l2"].as_f64().unwrap());
+        serde_json::from_str(&std::fs::read_to_string(dir.join("labels.json"))?)?;
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    println!("| log | answer | fitted (label) | held-out gap before → after [σ] | shrink | where | time |");
+    println!("|---|---|---|---|---|---|---|");
+    for label in labels.as_array().ok_or("labels.json is not a list")? {
+        let file = label["file"].as_str().ok_or("no file")?;
+        let records = limb_sim::log::read(&dir.join(file))?;
+        let (l1, l2) = (
+            label["l1"].as_f64().ok_or("no l1")?,
+            label["l2"].as_f64().ok_or("no l2")?,
+        );
         let start = Instant::now();
-        let model = ArmModel::new(l1, l2, &records).unwrap();
-        let problem = Problem::split(&model, HoldOut::default()).unwrap();
-        let s = select(&problem, &Options::default(), &|_| {}).unwrap();
-        let took = start.elapsed();
-        let head: Vec<String> = s.steps[0]
-            .ranking
-            .iter()
-            .take(3)
-            .map(|r| format!("{} {:.0} {:?}", r.effect, r.criterion, r.params))
-            .collect();
-        println!("{file}: chose {:?} gap {:.3} -> {:.3} ({:.2}) where {:?} in {:.2?} ({} evals)\n   {}\n   truth {}",
-            s.effects.first().map(|e| e.effect.clone()), s.gap.before, s.gap.after, s.gap.shrink, s.location, took, s.evaluations, head.join(" | "), label["params"]);
+        let d = diagnose(l1, l2, &records, threads, &|_| {})?.diagnosis;
+        let took = start.elapsed().as_secs_f64();
+        let fitted: Vec<String> = match d.ranking.first() {
+            Some(r) if d.effect != "none" => r
+                .params
+                .iter()
+                .map(|(k, v)| {
+                    let truth = label["params"][k.as_str()].as_f64().unwrap_or(f64::NAN);
+                    format!("{k} {v:.4} ({truth:.4})")
+                })
+                .collect(),
+            _ => Vec::new(),
+        };
+        let place = match (d.location.t_start, d.location.t_end) {
+            (Some(a), Some(b)) => format!("{} {a:.1}-{b:.1} s", d.location.signals.join(",")),
+            _ => "-".into(),
+        };
+        let band = d
+            .location
+            .band_hz
+            .map_or(String::new(), |[lo, hi]| format!(", {lo:.2}-{hi:.2} Hz"));
+        println!(
+            "| {file} | {} | {} | {:.3} → {:.3} | {:.1} % | {place}{band} | {took:.1} s |",
+            d.effect,
+            fitted.join(", "),
+            d.gap.before,
+            d.gap.after,
+            100.0 * d.gap.shrink
+        );
     }
+    Ok(())
 }

@@ -11,7 +11,8 @@
 //! * **Time**: e(t) = Σ over the named signals of (r² − floor), averaged
 //!   over a centred window of [`WINDOW`] seconds; the gap lies from the
 //!   first to the last time e exceeds both the window's noise level
-//!   (SIGNIFICANCE · floor · sqrt(2 / terms)) and a tenth of e's peak.
+//!   (SIGNIFICANCE · floor · sqrt(2 / terms)) and [`PEAK_SHARE`] of e's
+//!   peak (so a gap that grows a hundredfold is placed where it starts).
 //! * **Frequency**: the Hann-windowed periodogram of each named signal's
 //!   residual (samples taken as evenly spaced at the median interval);
 //!   above [`LOWEST_BAND`] Hz (slower is the motion itself), the bins
@@ -31,6 +32,8 @@ use serde::Serialize;
 pub const SIGNIFICANCE: f64 = 5.0;
 /// Smoothing window for the time localisation [s].
 pub const WINDOW: f64 = 0.5;
+/// Share of the smoothed excess's peak the time window starts at.
+pub const PEAK_SHARE: f64 = 0.01;
 /// Slowest frequency a band may start at [Hz].
 pub const LOWEST_BAND: f64 = 0.15;
 /// Zero-padding factor of the periodogram.
@@ -115,7 +118,7 @@ pub fn locate(model: &dyn Model, residual: &Series) -> (Location, Hints) {
         .collect();
     let top = smoothed.iter().copied().fold(0.0, f64::max);
     let terms = ((2 * half + 1) * named.len()) as f64;
-    let threshold = (SIGNIFICANCE * floor * (2.0 / terms).sqrt()).max(0.1 * top);
+    let threshold = (SIGNIFICANCE * floor * (2.0 / terms).sqrt()).max(PEAK_SHARE * top);
     let above = |v: &f64| *v > threshold;
     if let (Some(first), Some(last)) = (
         smoothed.iter().position(above),

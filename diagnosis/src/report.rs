@@ -164,6 +164,12 @@ fn chart(
 
 fn format_tick(value: f64, step: f64) -> String {
     let decimals = (-step.log10().floor()).max(0.0) as usize;
+    // A tick at zero may come out of the arithmetic as −0 or −1e−17.
+    let value = if value.abs() < step * 1e-6 {
+        0.0
+    } else {
+        value
+    };
     format!("{value:.decimals$}")
 }
 
