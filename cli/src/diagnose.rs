@@ -138,17 +138,12 @@ fn human(d: &Diagnosis) -> String {
     }
     text += "\nranking  (held-out criterion, share of the gap explained, fitted parameters)\n";
     for r in &d.ranking {
-        let params: Vec<String> = r
-            .params
-            .iter()
-            .map(|(k, v)| format!("{k} = {v:.4} {}", r.units.get(k).map_or("", String::as_str)))
-            .collect();
         text += &format!(
             "  {:<17} {:>12.1} {:>7.1} %  {}\n",
             r.effect,
             r.criterion,
             100.0 * r.score,
-            params.join(", ")
+            r.parameters_text()
         );
     }
     text

@@ -134,6 +134,22 @@ pub struct Ranked {
     pub held_out_after: f64,
 }
 
+impl Ranked {
+    /// The fitted parameters as `name = value unit`, comma-separated.
+    pub fn parameters_text(&self) -> String {
+        self.params
+            .iter()
+            .map(|(k, v)| {
+                format!(
+                    "{k} = {v:.4} {}",
+                    self.units.get(k).map_or("", String::as_str)
+                )
+            })
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+}
+
 /// The gap before and after the chosen effects, on held-out data.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Gap {

@@ -278,11 +278,6 @@ pub fn page(diagnosed: &Diagnosed, source: &str) -> String {
     html += "<h2>Ranking</h2><table><tr><th>effect</th><th>held-out criterion</th>\
              <th>gap explained</th><th>held-out gap after</th><th>fitted parameters</th></tr>";
     for r in &d.ranking {
-        let params: Vec<String> = r
-            .params
-            .iter()
-            .map(|(k, v)| format!("{k} = {v:.4} {}", r.units.get(k).map_or("", String::as_str)))
-            .collect();
         let _ = write!(
             html,
             "<tr><td>{}</td><td>{:.1}</td><td>{:.1} %</td><td>{:.4}</td><td>{}</td></tr>",
@@ -290,7 +285,7 @@ pub fn page(diagnosed: &Diagnosed, source: &str) -> String {
             r.criterion,
             100.0 * r.score,
             r.held_out_after,
-            escape(&params.join(", "))
+            escape(&r.parameters_text())
         );
     }
     html + "</table></body></html>\n"
