@@ -494,26 +494,27 @@ impl Model for ArmModel {
             ("active_torque", [amp, freq]) => {
                 // The cost is periodic-multimodal in the frequency, with
                 // a valley about 1 / (duration · 10) wide. With a spectral
-                // peak in the residual: a comb of 81 starts ±2 % around it
-                // (a strong torque on an arm that touches the table shifts
-                // the peak off the torque's frequency), at one amplitude —
-                // the best frequency hardly depends on it, and the
-                // refinement walks the amplitude. Without one: a
-                // log-spaced comb over 0.1-5 Hz at two amplitudes.
-                match hints.frequency {
-                    Some(f) => (-40..=40)
-                        .map(|k| {
-                            let fu = freq.unit_of(f * (1.0 + 0.0005 * f64::from(k)));
-                            vec![amp.unit_of(0.5), fu]
-                        })
-                        .collect(),
-                    None => (0..12)
-                        .flat_map(|k| {
-                            let fu = freq.unit_of(0.1 * 50f64.powf(f64::from(k) / 11.0));
-                            [0.1, 0.6].map(|a| vec![amp.unit_of(a), fu])
-                        })
-                        .collect(),
-                }
+                // peak in the residual: a comb of 41 frequencies ±2 %
+                // around it (a strong torque on an arm that touches the
+                // table shifts the peak off the torque's frequency), each
+                // at a small and a large amplitude: at the right frequency
+                // an amplitude below twice the true one beats the nominal
+                // sim (for a linear response), and the refinement walks
+                // the amplitude; the large one serves a strong, non-linear
+                // response. Always also a log-spaced
+                // comb over 0.1-5 Hz at two amplitudes, for a torque too
+                // weak to own the residual's peak.
+                let around_peak = hints.frequency.into_iter().flat_map(|f| {
+                    (-20..=20).flat_map(move |k| {
+                        let fu = freq.unit_of(f * (1.0 + 0.001 * f64::from(k)));
+                        [0.1, 0.6].map(|a| vec![amp.unit_of(a), fu])
+                    })
+                });
+                let comb = (0..12).flat_map(|k| {
+                    let fu = freq.unit_of(0.1 * 50f64.powf(f64::from(k) / 11.0));
+                    [0.1, 0.6].map(|a| vec![amp.unit_of(a), fu])
+                });
+                around_peak.chain(comb).collect()
             }
             ("grasp_slip", [shift, at]) => match hints.onset {
                 Some(onset) => [0.0, 0.15, 0.3]
