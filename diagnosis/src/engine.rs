@@ -5,7 +5,8 @@
 //! # Theory of operation
 //! For a set of effects S with k fitted parameters, the fit minimises the
 //! sum of squared scaled residuals on the fit samples ([`crate::optimize`],
-//! bounded and deterministic); the set is then judged only on held-out
+//! bounded and deterministic; every point it costs is first refined by
+//! the model's own solve, [`Model::polish`], where it has one); the set is then judged only on held-out
 //! samples, by the **held-out information criterion** relative to the
 //! set it extends (S₀, the nominal sim at first):
 //!
@@ -278,12 +279,17 @@ fn fit(
         .into_iter()
         .map(|s| base_units.iter().copied().chain(s).collect())
         .collect();
-    let cost = |units: &[f64]| match model.predict(&effects_at(model, &layout, units)) {
+    // Every point is refined by the model's own solve, where it has one.
+    let effects_for = |units: &[f64]| {
+        let effects = effects_at(model, &layout, units);
+        model.polish(&effects, &problem.fit.mask).unwrap_or(effects)
+    };
+    let cost = |units: &[f64]| match model.predict(&effects_for(units)) {
         Ok(predicted) => sum_of_squares(model, &predicted, &problem.fit.mask).0,
         Err(_) => f64::INFINITY,
     };
     let minimum = minimize(cost, &starts, options.budget);
-    let effects = effects_at(model, &layout, &minimum.point);
+    let effects = effects_for(&minimum.point);
     let held_sum = held_sum(problem, &effects).unwrap_or(f64::INFINITY);
     Fitted {
         effects,
