@@ -49,6 +49,24 @@ pub struct Parameter {
 }
 
 impl Parameter {
+    /// A parameter named `name` in `unit`, searched over [`min`, `max`]
+    /// by `scale`.
+    pub const fn new(
+        name: &'static str,
+        unit: &'static str,
+        min: f64,
+        max: f64,
+        scale: Scale,
+    ) -> Self {
+        Self {
+            name,
+            unit,
+            min,
+            max,
+            scale,
+        }
+    }
+
     /// The invariants above hold.
     pub fn is_valid(&self) -> bool {
         self.min.is_finite()
