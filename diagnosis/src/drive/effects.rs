@@ -36,22 +36,6 @@ pub const COULOMB_SMOOTHING: f64 = 1e-3;
 /// Name of the nominal sim's own candidate.
 pub const RIGID: &str = "rigid";
 
-fn parameter(
-    name: &'static str,
-    unit: &'static str,
-    min: f64,
-    max: f64,
-    scale: Scale,
-) -> Parameter {
-    Parameter {
-        name,
-        unit,
-        min,
-        max,
-        scale,
-    }
-}
-
 /// The candidates, `rigid` first (the nominal sim's base). `compliance`
 /// and `backlash` need a load-side encoder and are offered only
 /// `with_load`.
@@ -64,6 +48,7 @@ fn parameter(
 pub fn candidates(with_load: bool) -> Vec<Candidate> {
     use Scale::{Linear, Logarithmic};
     let one = |name, parameters| Candidate { name, parameters };
+    let parameter = Parameter::new;
     let mut rigid = vec![
         parameter("mass", "kg", 0.0, 1e4, Linear),
         parameter("offset", "N", -1e5, 1e5, Linear),
@@ -142,8 +127,13 @@ pub fn play(q: &[f64], width: f64) -> Vec<f64> {
 /// two levels at about (t[i−1] + t[i]) / 2; the rebuilt position
 /// interpolates linearly between such crossings (and holds the reading
 /// before the first and after the last).
+///
+/// Readings that do not sit on the lattice of `step` (within a millionth
+/// of a step) were not rounded at that step: they are returned unchanged,
+/// so the effect changes nothing unless the log really is quantized.
 pub fn dequantize(q: &[f64], t: &[f64], step: f64) -> Vec<f64> {
-    if step.is_nan() || step <= 0.0 || q.len() != t.len() {
+    let on_lattice = |x: &f64| ((x / step) - (x / step).round()).abs() < 1e-6;
+    if step.is_nan() || step <= 0.0 || q.len() != t.len() || !q.iter().all(on_lattice) {
         return q.to_vec();
     }
     let level: Vec<f64> = q.iter().map(|x| (x / step).round()).collect();
@@ -174,9 +164,19 @@ pub fn dequantize(q: &[f64], t: &[f64], step: f64) -> Vec<f64> {
         .collect()
 }
 
+/// The encoder step the readings `q` suggest: the smallest non-zero change
+/// between consecutive readings (of a quantized log, one step; of an
+/// unrounded one, something far below any step that would matter).
+pub fn encoder_step(q: &[f64]) -> Option<f64> {
+    q.windows(2)
+        .map(|w| (w[1] - w[0]).abs())
+        .filter(|d| *d > 0.0 && d.is_finite())
+        .min_by(f64::total_cmp)
+}
+
 #[cfg(test)]
 mod tests {
-    use super::{candidates, dequantize, play};
+    use super::{candidates, dequantize, encoder_step, play};
 
     #[test]
     fn every_parameter_is_bounded_and_load_effects_need_a_load() {
@@ -207,5 +207,8 @@ mod tests {
         // Crossings are placed to half a sample (0.5 ms × 0.01 m/s); the
         // reading itself is off by up to half a step (50 µm).
         assert!(error(&rebuilt) < 6e-6 && error(&read) > 4e-5);
+        assert!((encoder_step(&read).unwrap_or(0.0) - 1e-4).abs() < 1e-12);
+        // Off the lattice: nothing to rebuild.
+        assert_eq!(dequantize(&truth, &t, 1e-4), truth);
     }
 }

@@ -32,28 +32,9 @@ const COLUMNS: [&str; 6] = ["t", "ref", "q", "tau", "q_load", "f_ext"];
 /// How many of [`COLUMNS`] are required.
 const REQUIRED: usize = 4;
 
-/// A fault in a drive log.
-#[derive(Clone, Debug, PartialEq, thiserror::Error)]
-pub enum DriveLogError {
-    /// The file could not be read.
-    #[error("{file}: {message}")]
-    Io {
-        /// The file.
-        file: String,
-        /// What the operating system said.
-        message: String,
-    },
-    /// The text is not a valid drive log.
-    #[error("{file}:{line}: {message}")]
-    Malformed {
-        /// The file (`<text>` for in-memory text).
-        file: String,
-        /// 1-based line of the fault.
-        line: usize,
-        /// What is wrong.
-        message: String,
-    },
-}
+/// A fault in a drive log: the project's log error, naming the file (and
+/// the 1-based line).
+pub type DriveLogError = limb_sim::log::LogError;
 
 /// One drive log, column by column (all columns the same length, SI
 /// units).

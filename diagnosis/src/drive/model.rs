@@ -37,7 +37,7 @@
 //! `step`, `width`). A least-squares value outside its parameter's range
 //! is clamped into it.
 
-use super::effects::{candidates, dequantize, play, smooth_sign, RIGID};
+use super::effects::{candidates, dequantize, encoder_step, play, smooth_sign, RIGID};
 use super::filter::{derivative, zero_phase};
 use super::log::DriveLog;
 use super::lsq::solve;
@@ -450,6 +450,14 @@ impl Model for DriveModel {
             }
             // One searched parameter (`fs` is solved): a fine grid on `vs`.
             Some("stribeck_friction") => grid(1, 9).into_iter().map(|u| vec![0.5, u[0]]).collect(),
+            // Rounded readings: the step is the lattice they sit on (off
+            // it the effect does nothing, so a grid would find nothing).
+            Some("quantization") => {
+                let parameter = &self.candidates[candidate].parameters[0];
+                encoder_step(&self.raw_q)
+                    .map(|step| vec![vec![parameter.unit_of(step)]])
+                    .unwrap_or_else(|| grid(1, 3))
+            }
             Some(_) => grid(1, 17),
             None => Vec::new(),
         }

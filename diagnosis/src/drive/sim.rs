@@ -12,16 +12,16 @@
 //! (EMPS gains: G = 35.15 N/V, kp = 160.18 1/s, kv = 243.45 V s/m).
 //! The effects act as `super::effects` describes, with physics the model
 //! only approximates where a real drive would:
-//! * friction laws use a sharper sign (tanh(v / 0.1 mm/s)) than the
-//!   model's;
+//! * friction acts on the true velocity, the model sees a filtered one;
 //! * `latency`: the logged force is the applied force `delay` earlier;
 //! * `quantization`: the encoder rounds q to `step`, and the controller
 //!   sees the rounded reading;
 //! * `compliance` and `backlash` deflect the load side kinematically:
 //!   q_load = q − tau / k, or the play operator of q (the load carries no
 //!   mass of its own);
-//! * noise: encoder σ [`POSITION_NOISE`] on q and q_load (none once an
-//!   encoder step is coarser), force σ [`FORCE_NOISE`] on the logged tau.
+//! * noise: encoder σ [`POSITION_NOISE`] on q and q_load (replaced by
+//!   the rounding when `quantization` is withheld), force σ
+//!   [`FORCE_NOISE`] on the logged tau.
 
 use super::effects::play;
 use super::log::DriveLog;
@@ -42,8 +42,11 @@ pub const FORCE_NOISE: f64 = 0.5;
 /// Controller: actuator gain [N/V], position gain [1/s], velocity gain
 /// [V s/m] (EMPS).
 const GAINS: (f64, f64, f64) = (35.1507, 160.18, 243.45);
-/// Sign smoothing of the simulated friction [m/s].
-const SIGN_SMOOTHING: f64 = 1e-4;
+/// Sign smoothing of the simulated friction [m/s]: the model's own, so
+/// that a withheld Coulomb law is one the candidates can represent (a
+/// sharper simulated sign is represented by Coulomb plus a narrow Stribeck
+/// term, and the self-check would count that as a wrong extra).
+const SIGN_SMOOTHING: f64 = super::effects::COULOMB_SMOOTHING;
 
 /// One withheld effect with its true parameters (units of
 /// [`super::effects`]).
