@@ -7,11 +7,12 @@
 
 use crate::error::{emit, print_json, CliError};
 use indicatif::{ProgressBar, ProgressStyle};
+use limb_diagnosis::report::{self, Subject};
 use limb_diagnosis::selfcheck::{self, Summary};
 use limb_diagnosis::verdict::{diagnose, Diagnosis};
 use limb_diagnosis::Progress;
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Arguments of `limb diagnose`.
 #[derive(clap::Args, Debug)]
@@ -100,13 +101,15 @@ pub fn run(args: &DiagnoseArgs) -> Result<(), CliError> {
         bar.finish_and_clear();
     }
     if let Some(path) = &args.report {
-        let page = limb_diagnosis::report::page(&diagnosed, &log.display().to_string());
-        std::fs::write(path, page).map_err(|error| {
-            CliError::BadInput(format!(
-                "{}: cannot write the report: {error}",
-                path.display()
-            ))
-        })?;
+        write_report(
+            path,
+            &Subject {
+                model: &diagnosed.model,
+                selection: &diagnosed.selection,
+                source: &log.display().to_string(),
+                held_out: &diagnosed.diagnosis.held_out,
+            },
+        )?;
     }
     if args.json {
         return print_json(&diagnosed.diagnosis);
@@ -147,6 +150,19 @@ fn human(d: &Diagnosis) -> String {
         );
     }
     text
+}
+
+/// Writes the `--report` page of `subject` to `path`.
+///
+/// # Errors
+/// [`CliError::BadInput`] when the file cannot be written.
+pub fn write_report(path: &Path, subject: &Subject) -> Result<(), CliError> {
+    std::fs::write(path, report::page(subject)).map_err(|error| {
+        CliError::BadInput(format!(
+            "{}: cannot write the report: {error}",
+            path.display()
+        ))
+    })
 }
 
 fn self_check(logs: usize, seed: u64, threads: usize, json: bool) -> Result<(), CliError> {

@@ -5,6 +5,7 @@
 mod arebo;
 mod config;
 mod diagnose;
+mod diagnose_drive;
 mod error;
 mod estimate;
 mod kuka;
@@ -55,6 +56,8 @@ enum Command {
         #[command(subcommand)]
         command: arebo::AreboCommand,
     },
+    /// Gap diagnosis of one actuated axis (spec/drive.md): which effects beyond the rigid model.
+    DiagnoseDrive(diagnose_drive::DiagnoseDriveArgs),
     /// KUKA LBR iiwa FRI adapter tools.
     #[command(subcommand)]
     Kuka(kuka::KukaCommand),
@@ -87,6 +90,7 @@ fn main() {
         Command::Zenoh(args) => zenoh::run(args),
         Command::Arebo { command } => arebo::run(command),
         Command::Kuka(command) => kuka::run(command),
+        Command::DiagnoseDrive(args) => diagnose_drive::run(&args),
     };
     if let Err(error) = result {
         eprintln!("limb: {error}");

@@ -5,17 +5,20 @@
 //! # Theory of operation
 //! For a set of effects S with k fitted parameters, the fit minimises the
 //! sum of squared scaled residuals on the fit samples ([`crate::optimize`],
-//! bounded and deterministic); the set is then judged only on held-out
+//! bounded and deterministic; every point it costs is first refined by
+//! the model's own solve, [`Model::polish`], where it has one); the set is then judged only on held-out
 //! samples, by the **held-out information criterion** relative to the
 //! set it extends (S₀, the nominal sim at first):
 //!
 //! ```text
-//! known noise (floor > 0):   Δ = (SS₀ − SS) / floor − k ln n
-//! unknown noise (floor = 0): Δ = n ln(SS₀ / SS)     − k ln n
+//! known noise (floor > 0):   Δ = (SS₀ − SS) / floor        − k ln n
+//! unknown noise (floor = 0): Δ = Σₛ nₛ ln(SS₀ₛ / SSₛ)      − k ln n
 //! ```
 //!
-//! with SS the held-out sum of squares over its n terms: the Gaussian
-//! log-likelihood gain (σ known, or profiled out) less the BIC penalty.
+//! with SS the held-out sum of squares over its n terms (SSₛ, nₛ: signal
+//! s's share): the Gaussian log-likelihood gain (σ known, or profiled out
+//! separately for each signal, whose noise levels need not be alike) less
+//! the BIC penalty.
 //! Scoring on held-out data already punishes over-fitting; the penalty
 //! makes a parameter pay for itself on top, so pure noise never earns an
 //! effect. **Forward selection** adds the candidate with the largest Δ,
@@ -27,7 +30,7 @@ use crate::holdout::{HoldOut, TooShort};
 use crate::locate::{locate, Location};
 use crate::model::{Applied, Hints, Model, ModelError, Series};
 use crate::optimize::{minimize, Budget};
-use crate::residual::{gap, scaled, sum_of_squares};
+use crate::residual::{gap, scaled, signal_sums, sum_of_squares};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -223,18 +226,34 @@ pub enum EngineError {
 #[derive(Clone, Debug)]
 struct Fitted {
     effects: Vec<Applied>,
-    held_sum: f64,
+    /// Held-out (sum of squares, terms) per signal.
+    held: Vec<(f64, usize)>,
     evaluations: usize,
 }
 
-fn criterion(reference: f64, sum: f64, terms: usize, parameters: usize, floor: f64) -> f64 {
-    let n = terms.max(1) as f64;
+/// Total of per-signal sums of squares.
+fn total(sums: &[(f64, usize)]) -> f64 {
+    sums.iter().map(|s| s.0).sum()
+}
+
+/// Held-out information criterion of `sums` against `reference` (both
+/// per signal), for `parameters` added parameters (module docs).
+fn criterion(
+    reference: &[(f64, usize)],
+    sums: &[(f64, usize)],
+    parameters: usize,
+    floor: f64,
+) -> f64 {
+    let n = reference.iter().map(|s| s.1).sum::<usize>().max(1) as f64;
     let gain = if floor > 0.0 {
-        (reference - sum) / floor
-    } else if sum > 0.0 && reference > 0.0 {
-        n * (reference / sum).ln()
+        (total(reference) - total(sums)) / floor
     } else {
-        0.0
+        reference
+            .iter()
+            .zip(sums)
+            .filter(|(r, s)| r.0 > 0.0 && s.0 > 0.0)
+            .map(|(r, s)| r.1 as f64 * (r.0 / s.0).ln())
+            .sum()
     };
     if gain.is_finite() {
         gain - parameters as f64 * n.ln()
@@ -294,23 +313,33 @@ fn fit(
         .into_iter()
         .map(|s| base_units.iter().copied().chain(s).collect())
         .collect();
-    let cost = |units: &[f64]| match model.predict(&effects_at(model, &layout, units)) {
+    // Every point is refined by the model's own solve, where it has one.
+    let effects_for = |units: &[f64]| {
+        let effects = effects_at(model, &layout, units);
+        model.polish(&effects, &problem.fit.mask).unwrap_or(effects)
+    };
+    let cost = |units: &[f64]| match model.predict(&effects_for(units)) {
         Ok(predicted) => sum_of_squares(model, &predicted, &problem.fit.mask).0,
         Err(_) => f64::INFINITY,
     };
     let minimum = minimize(cost, &starts, options.budget);
-    let effects = effects_at(model, &layout, &minimum.point);
-    let held_sum = held_sum(problem, &effects).unwrap_or(f64::INFINITY);
+    let effects = effects_for(&minimum.point);
+    let signals = problem.held.model.signals().len();
+    let held = held_sums(problem, &effects).unwrap_or_else(|_| vec![(f64::INFINITY, 0); signals]);
     Fitted {
         effects,
-        held_sum,
+        held,
         evaluations: minimum.evaluations + 1,
     }
 }
 
-fn held_sum(problem: &Problem, effects: &[Applied]) -> Result<f64, ModelError> {
+fn held_sums(problem: &Problem, effects: &[Applied]) -> Result<Vec<(f64, usize)>, ModelError> {
     let predicted = problem.held.model.predict(effects)?;
-    Ok(sum_of_squares(problem.held.model, &predicted, &problem.held.mask).0)
+    Ok(signal_sums(
+        problem.held.model,
+        &predicted,
+        &problem.held.mask,
+    ))
 }
 
 /// `f(0..count)` on `threads` workers; results in index order.
@@ -375,7 +404,11 @@ pub fn select(
     }
     let nominal_effects = chosen.clone();
     let nominal = held.predict(&chosen).map_err(EngineError::Nominal)?;
-    let (nominal_sum, terms) = sum_of_squares(held, &nominal, &problem.held.mask);
+    let nominal_sums = signal_sums(held, &nominal, &problem.held.mask);
+    let (nominal_sum, terms) = (
+        total(&nominal_sums),
+        nominal_sums.iter().map(|s| s.1).sum::<usize>(),
+    );
     let (location, hints) = locate(held, &scaled(held, &nominal));
     let gap_of = |sum: f64| gap(sum / terms.max(1) as f64, floor);
     let before = gap_of(nominal_sum);
@@ -386,7 +419,7 @@ pub fn select(
             0.0
         }
     };
-    let mut current = nominal_sum;
+    let mut current = nominal_sums;
     let mut steps = Vec::new();
     for _ in 0..options.max_effects.min(candidates.len()) {
         let remaining: Vec<usize> = (0..candidates.len())
@@ -414,12 +447,12 @@ pub fn select(
                     values: Vec::new(),
                 });
                 let parameters = &candidates[mine.candidate].parameters;
-                let after = gap_of(f.held_sum);
+                let after = gap_of(total(&f.held));
                 (
                     Ranked {
                         effect: candidates[mine.candidate].name.to_string(),
                         score: share(after),
-                        criterion: criterion(current, f.held_sum, terms, parameters.len(), floor),
+                        criterion: criterion(&current, &f.held, parameters.len(), floor),
                         params: parameters
                             .iter()
                             .zip(&mine.values)
@@ -446,7 +479,7 @@ pub fn select(
         });
         let Some((_, fitted)) = winner else { break };
         chosen = fitted.effects;
-        current = fitted.held_sum;
+        current = fitted.held;
     }
     let chosen_prediction = if chosen == nominal_effects {
         nominal.clone()
@@ -454,7 +487,7 @@ pub fn select(
         held.predict(&chosen).map_err(EngineError::Nominal)?
     };
     let (remaining, _) = locate(held, &scaled(held, &chosen_prediction));
-    let after = gap_of(current);
+    let after = gap_of(total(&current));
     let base = nominal_effects.len();
     let effects = chosen
         .iter()
@@ -523,11 +556,25 @@ mod tests {
     fn criterion_charges_each_parameter_ln_n() {
         // Known noise: a gain of exactly k ln n is worth nothing.
         let n = 1000usize;
-        let c = criterion(2000.0, 2000.0 - 2.0 * (n as f64).ln(), n, 2, 1.0);
+        let c = criterion(
+            &[(2000.0, n)],
+            &[(2000.0 - 2.0 * (n as f64).ln(), n)],
+            2,
+            1.0,
+        );
         assert!(c.abs() < 1e-9);
         // Unknown noise: halving the residual is worth n ln 2 − k ln n.
-        let c = criterion(2.0, 1.0, n, 1, 0.0);
+        let c = criterion(&[(2.0, n)], &[(1.0, n)], 1, 0.0);
         assert!((c - (n as f64 * 2f64.ln() - (n as f64).ln())).abs() < 1e-9);
-        assert_eq!(criterion(1.0, f64::INFINITY, n, 1, 1.0), f64::NEG_INFINITY);
+        assert_eq!(
+            criterion(&[(1.0, n)], &[(f64::INFINITY, n)], 1, 1.0),
+            f64::NEG_INFINITY
+        );
+        // Unknown noise, two signals: each is judged against its own
+        // noise, so halving a quiet signal's residual counts as much as
+        // halving a loud one's.
+        let quiet = criterion(&[(1e6, n), (2.0, n)], &[(1e6, n), (1.0, n)], 0, 0.0);
+        let loud = criterion(&[(2e6, n), (1.0, n)], &[(1e6, n), (1.0, n)], 0, 0.0);
+        assert!((quiet - loud).abs() < 1e-6 && (quiet - n as f64 * 2f64.ln()).abs() < 1e-6);
     }
 }

@@ -18,12 +18,16 @@
 //! verdict::diagnose (the `limb diagnose` answer) · selfcheck (blind check)
 //! ```
 //!
+//! [`drive`] is the second plant: one actuated axis against its rigid
+//! inverse model (`spec/drive.md`).
+//!
 //! [`model`] is the only thing a plant provides; [`engine`], [`optimize`],
 //! [`holdout`], [`residual`] and [`locate`] know nothing of arms.
 
 #![forbid(unsafe_code)]
 
 pub mod arm;
+pub mod drive;
 pub mod engine;
 pub mod holdout;
 pub mod locate;

@@ -149,7 +149,7 @@ pub fn locate(model: &dyn Model, residual: &Series) -> (Location, Hints) {
 }
 
 /// Median sample interval [s] (1 when there are fewer than two samples).
-fn median_interval(times: &[f64]) -> f64 {
+pub fn median_interval(times: &[f64]) -> f64 {
     let mut d: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
     if d.is_empty() {
         return 1.0;

@@ -49,6 +49,24 @@ pub struct Parameter {
 }
 
 impl Parameter {
+    /// A parameter named `name` in `unit`, searched over [`min`, `max`]
+    /// by `scale`.
+    pub const fn new(
+        name: &'static str,
+        unit: &'static str,
+        min: f64,
+        max: f64,
+        scale: Scale,
+    ) -> Self {
+        Self {
+            name,
+            unit,
+            min,
+            max,
+            scale,
+        }
+    }
+
     /// The invariants above hold.
     pub fn is_valid(&self) -> bool {
         self.min.is_finite()
@@ -220,6 +238,16 @@ pub trait Model: Sync {
     /// # Errors
     /// An effect set the model cannot apply, or a failed simulation.
     fn predict(&self, effects: &[Applied]) -> Result<Series, ModelError>;
+    /// The model's own closed-form refinement of `effects` on the samples
+    /// where `mask` is `true` (e.g. a least-squares solve of the
+    /// parameters its prediction is linear in, the others held), or `None`
+    /// (the default) to leave every parameter to the optimiser. The engine
+    /// refines every point it costs, so the optimiser then searches only
+    /// what the model cannot solve. Values returned must lie in their
+    /// parameters' ranges.
+    fn polish(&self, _effects: &[Applied], _mask: &[bool]) -> Option<Vec<Applied>> {
+        None
+    }
     /// Start points for fitting `candidate`, in unit coordinates (one per
     /// parameter, each in [0, 1]). The default is an even grid.
     fn starts(&self, candidate: usize, _hints: &Hints) -> Vec<Vec<f64>> {

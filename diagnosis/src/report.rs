@@ -3,18 +3,21 @@
 //!
 //! It shows the answer and the held-out gap, then for every signal that
 //! carries the gap (all signals when none does): the real data against
-//! the nominal sim and the sim with the chosen effect, and the scaled
+//! the nominal sim and the sim with the chosen effects, and the scaled
 //! residual of both over time with the localised window shaded; last the
-//! ranking of every candidate.
+//! effects added in order and the ranking of every candidate. The page
+//! knows only [`Model`] and the engine's [`Selection`], so every plant
+//! (the arm, a drive) gets the same page.
 //!
 //! The SVG is written here rather than by a plotting crate: the page then
 //! needs no font files at build or run time and is byte-for-byte
 //! reproducible. Long series are thinned to at most [`POINTS`] points per
 //! line (every k-th sample).
 
+use crate::engine::Selection;
+use crate::locate::Location;
 use crate::model::{Model, Series};
 use crate::residual::scaled;
-use crate::verdict::Diagnosed;
 use std::fmt::Write;
 
 /// Most points drawn per line.
@@ -173,26 +176,71 @@ fn format_tick(value: f64, step: f64) -> String {
     format!("{value:.decimals$}")
 }
 
-/// The report page for a diagnosed log read from `source`.
-pub fn page(diagnosed: &Diagnosed, source: &str) -> String {
-    let model: &dyn Model = &diagnosed.model;
-    let d = &diagnosed.diagnosis;
-    let predictions = &diagnosed.selection.predictions;
+/// A location in words: signals, time window, band.
+fn place(location: &Location) -> String {
+    let mut text = match location.t_start.zip(location.t_end) {
+        Some((a, b)) => format!(
+            "{} from {a:.2} s to {b:.2} s",
+            escape(&location.signals.join(", "))
+        ),
+        None => "nothing beyond the measurement noise".to_string(),
+    };
+    if let Some([lo, hi]) = location.band_hz {
+        let _ = write!(text, ", periodic, {lo:.2}-{hi:.2} Hz");
+    }
+    text
+}
+
+/// What one report page shows: the plant's model of the scored (held-out)
+/// data and the engine's selection made on it.
+#[derive(Clone, Copy)]
+pub struct Subject<'a> {
+    /// The model whose data were scored (the held-out side).
+    pub model: &'a dyn Model,
+    /// The engine's answer, predictions included.
+    pub selection: &'a Selection,
+    /// The log file(s) diagnosed, as the page names them.
+    pub source: &'a str,
+    /// How the data were held out, in words.
+    pub held_out: &'a str,
+}
+
+/// The report page of one diagnosis (any plant: the arm, a drive).
+pub fn page(subject: &Subject) -> String {
+    let Subject {
+        model,
+        selection,
+        source,
+        held_out,
+    } = *subject;
+    let predictions = &selection.predictions;
     let empty = Series::with_capacity(model.signals().len(), 0);
     let nominal = predictions.nominal.as_ref().unwrap_or(&empty);
     let chosen = predictions.chosen.as_ref().unwrap_or(nominal);
     let (before, after) = (scaled(model, nominal), scaled(model, chosen));
     let times = model.times();
-    let shade = d.location.t_start.zip(d.location.t_end);
-    let named: Vec<usize> = if d.location.signals.is_empty() {
+    let location = &selection.location;
+    let shade = location.t_start.zip(location.t_end);
+    let named: Vec<usize> = if location.signals.is_empty() {
         (0..model.signals().len()).collect()
     } else {
-        d.location
+        location
             .signals
             .iter()
             .filter_map(|n| model.signals().iter().position(|s| s.name == n))
             .collect()
     };
+    let effects = if selection.effects.is_empty() {
+        "none".to_string()
+    } else {
+        let names: Vec<&str> = selection
+            .effects
+            .iter()
+            .map(|e| e.effect.as_str())
+            .collect();
+        names.join(" + ")
+    };
+    let gap = &selection.gap;
     let mut html = String::from(
         "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>limb diagnose</title>\
          <style>body{font-family:sans-serif;max-width:960px;margin:1em auto}\
@@ -203,30 +251,28 @@ pub fn page(diagnosed: &Diagnosed, source: &str) -> String {
         html,
         "<h1>Sim-to-real gap: {}</h1><p>Log <code>{}</code>. Held out: {}.</p>\
          <p>Held-out gap ({}) {:.4} &rarr; {:.4}: shrink {:.1} %.</p>",
-        escape(&d.effect),
+        escape(&effects),
         escape(source),
-        escape(&d.held_out),
-        escape(&d.gap.metric),
-        d.gap.before,
-        d.gap.after,
-        100.0 * d.gap.shrink
+        escape(held_out),
+        escape(&gap.metric),
+        gap.before,
+        gap.after,
+        100.0 * gap.shrink
     );
     let _ = write!(
         html,
-        "<p>Where: {}",
-        match shade {
-            Some((a, b)) => format!(
-                "{} from {a:.2} s to {b:.2} s (shaded)",
-                escape(&d.location.signals.join(", "))
-            ),
-            None => "nowhere beyond the measurement noise".to_string(),
-        }
+        "<p>Where the nominal sim's gap lies: {}{}.</p><p>What the chosen effects leave: {}",
+        place(location),
+        if shade.is_some() { " (shaded)" } else { "" },
+        place(&selection.remaining)
     );
-    if let Some([lo, hi]) = d.location.band_hz {
-        let _ = write!(html, "; periodic, {lo:.2}-{hi:.2} Hz");
-    }
     html += ".</p><h2>Sim against real</h2>";
-    let with = format!("sim + {}", d.effect);
+    // A legend entry has about 150 px.
+    let with = if effects.len() <= 20 {
+        format!("sim + {effects}")
+    } else {
+        "sim + chosen effects".to_string()
+    };
     for &s in &named {
         let signal = model.signals()[s];
         html += &chart(
@@ -253,12 +299,20 @@ pub fn page(diagnosed: &Diagnosed, source: &str) -> String {
             shade,
         );
     }
-    html += "<h2>Residuals over time (real − sim, in units of the noise σ)</h2>";
+    let (scale, unit) = if model.noise_floor() > 0.0 {
+        ("in units of the noise σ", "σ")
+    } else {
+        (
+            "relative to each signal's RMS; the noise is unknown",
+            "÷ RMS",
+        )
+    };
+    let _ = write!(html, "<h2>Residuals over time (real − sim, {scale})</h2>");
     for &s in &named {
         let signal = model.signals()[s];
         html += &chart(
             &format!("{} residual", signal.name),
-            "σ",
+            unit,
             times,
             &[
                 Line {
@@ -275,9 +329,25 @@ pub fn page(diagnosed: &Diagnosed, source: &str) -> String {
             shade,
         );
     }
-    html += "<h2>Ranking</h2><table><tr><th>effect</th><th>held-out criterion</th>\
-             <th>gap explained</th><th>held-out gap after</th><th>fitted parameters</th></tr>";
-    for r in &d.ranking {
+    html += "<h2>Effects added, in order</h2><table><tr><th>effect</th>\
+             <th>held-out gap after</th><th>fitted parameters (refitted with all added)</th></tr>";
+    for e in &selection.effects {
+        let _ = write!(
+            html,
+            "<tr><td>{}</td><td>{:.4}</td><td>{}</td></tr>",
+            escape(&e.effect),
+            e.held_out_after,
+            escape(&e.parameters_text())
+        );
+    }
+    if selection.effects.is_empty() {
+        html += "<tr><td>none</td><td></td><td>no candidate earns its parameters</td></tr>";
+    }
+    html += "</table><h2>Ranking of every candidate (first selection step)</h2><table><tr><th>effect</th>\
+             <th>held-out criterion</th><th>gap explained</th><th>held-out gap after</th>\
+             <th>fitted parameters</th></tr>";
+    let first = selection.steps.first().map_or(&[][..], |s| &s.ranking[..]);
+    for r in first {
         let _ = write!(
             html,
             "<tr><td>{}</td><td>{:.1}</td><td>{:.1} %</td><td>{:.4}</td><td>{}</td></tr>",

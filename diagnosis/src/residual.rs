@@ -12,30 +12,40 @@ use crate::model::{Model, Series};
 /// Sum of squared scaled residuals over the masked samples, and how many
 /// terms it has. A non-finite prediction makes the sum `+inf`.
 pub fn sum_of_squares(model: &dyn Model, predicted: &Series, mask: &[bool]) -> (f64, usize) {
+    let sums = signal_sums(model, predicted, mask);
+    (
+        sums.iter().map(|s| s.0).sum(),
+        sums.iter().map(|s| s.1).sum(),
+    )
+}
+
+/// [`sum_of_squares`] of each signal separately: (sum, terms) per signal,
+/// in signal order. A non-finite prediction makes every sum `+inf`.
+pub fn signal_sums(model: &dyn Model, predicted: &Series, mask: &[bool]) -> Vec<(f64, usize)> {
     let observed = model.observed();
     let scales = model.scales();
-    let mut sum = 0.0;
-    let mut count = 0usize;
+    let mut sums = vec![(0.0, 0usize); scales.len()];
     for (sample, used) in mask.iter().enumerate() {
         if !used {
             continue;
         }
-        for ((o, p), s) in observed
+        for (((o, p), s), sum) in observed
             .row(sample)
             .iter()
             .zip(predicted.row(sample))
             .zip(scales)
+            .zip(sums.iter_mut())
         {
             let r = (o - p) / s;
-            sum += r * r;
-            count += 1;
+            sum.0 += r * r;
+            sum.1 += 1;
         }
     }
-    if sum.is_finite() && predicted.samples() == observed.samples() {
-        (sum, count)
-    } else {
-        (f64::INFINITY, count)
+    let finite = sums.iter().all(|s| s.0.is_finite());
+    if !(finite && predicted.samples() == observed.samples()) {
+        sums.iter_mut().for_each(|s| s.0 = f64::INFINITY);
     }
+    sums
 }
 
 /// The gap of a mean square `mean_square` above `floor`.
