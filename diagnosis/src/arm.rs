@@ -24,7 +24,7 @@
 //! the real sensor rounds its noisy reading.
 
 use crate::model::{
-    grid, Applied, Candidate, Hints, Model, ModelError, Parameter, Scale, Series, Signal,
+    grid, Applied, Candidate, Data, Hints, Model, ModelError, Parameter, Scale, Series, Signal,
 };
 use limb_kernel::geometry::Pose;
 use limb_kernel::motion::{EstimationMotion, EstimationMotionParameters};
@@ -237,14 +237,10 @@ pub fn candidates(duration: f64) -> Vec<Candidate> {
 pub struct ArmModel {
     params: PlantParameters,
     motion: EstimationMotion,
-    signals: Vec<Signal>,
-    scales: Vec<f64>,
+    data: Data,
     columns: Vec<usize>,
-    times: Vec<f64>,
     steps: Vec<usize>,
-    observed: Series,
     nominal: Vec<Sensed>,
-    candidates: Vec<Candidate>,
 }
 
 impl ArmModel {
@@ -327,14 +323,16 @@ impl ArmModel {
         Ok(Self {
             params,
             motion,
-            signals: columns.iter().map(|c| ALL_SIGNALS[*c]).collect(),
-            scales: columns.iter().map(|c| ALL_SCALES[*c]).collect(),
+            data: Data {
+                signals: columns.iter().map(|c| ALL_SIGNALS[*c]).collect(),
+                scales: columns.iter().map(|c| ALL_SCALES[*c]).collect(),
+                times: records.iter().map(|r| r.time).collect(),
+                observed,
+                candidates: candidates(duration),
+            },
             columns,
-            times: records.iter().map(|r| r.time).collect(),
             steps,
-            observed,
             nominal,
-            candidates: candidates(duration),
         })
     }
 
@@ -342,10 +340,10 @@ impl ArmModel {
         applied
             .iter()
             .map(|a| {
-                let candidate = self
-                    .candidates
-                    .get(a.candidate)
-                    .ok_or_else(|| ModelError::Effects(format!("no candidate {}", a.candidate)))?;
+                let candidate =
+                    self.data.candidates.get(a.candidate).ok_or_else(|| {
+                        ModelError::Effects(format!("no candidate {}", a.candidate))
+                    })?;
                 let pairs: Vec<(&str, f64)> = candidate
                     .parameters
                     .iter()
@@ -446,12 +444,8 @@ fn expected_rounding(q: &Quantization, pose: [f64; 3]) -> [f64; 3] {
 }
 
 impl Model for ArmModel {
-    fn signals(&self) -> &[Signal] {
-        &self.signals
-    }
-
-    fn scales(&self) -> &[f64] {
-        &self.scales
+    fn data(&self) -> &Data {
+        &self.data
     }
 
     fn noise_floor(&self) -> f64 {
@@ -460,18 +454,6 @@ impl Model for ArmModel {
 
     fn gap_metric(&self) -> &'static str {
         "held_out_excess_rms_sigma"
-    }
-
-    fn times(&self) -> &[f64] {
-        &self.times
-    }
-
-    fn observed(&self) -> &Series {
-        &self.observed
-    }
-
-    fn candidates(&self) -> &[Candidate] {
-        &self.candidates
     }
 
     fn predict(&self, applied: &[Applied]) -> Result<Series, ModelError> {
@@ -486,7 +468,7 @@ impl Model for ArmModel {
     }
 
     fn starts(&self, candidate: usize, hints: &Hints) -> Vec<Vec<f64>> {
-        let Some(c) = self.candidates.get(candidate) else {
+        let Some(c) = self.data.candidates.get(candidate) else {
             return Vec::new();
         };
         let measurement_side = MEASUREMENT_SIDE.contains(&c.name);
@@ -531,9 +513,10 @@ impl Model for ArmModel {
                 // Rounded readings sit on a lattice: its spacing is the
                 // step, to the precision the optimiser cannot reach from
                 // a grid (the cost has a minimum per lattice alignment).
-                let position =
-                    resolution(&[self.observed.column(0), self.observed.column(1)].concat());
-                let angle = resolution(&self.observed.column(2));
+                let position = resolution(
+                    &[self.data.observed.column(0), self.data.observed.column(1)].concat(),
+                );
+                let angle = resolution(&self.data.observed.column(2));
                 let mut starts = grid(2, 11);
                 starts.push(vec![pos.unit_of(position), ang.unit_of(angle)]);
                 starts

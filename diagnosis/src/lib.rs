@@ -40,4 +40,4 @@ pub mod verdict;
 
 pub use engine::{select, Options, Problem, Progress, Selection};
 pub use holdout::HoldOut;
-pub use model::{Applied, Candidate, Model, ModelError, Series};
+pub use model::{Applied, Candidate, Data, Model, ModelError, Series};

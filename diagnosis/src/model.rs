@@ -206,13 +206,38 @@ pub struct Hints {
     pub frequency: Option<f64>,
 }
 
+/// What a model compares: its signals and their scales, the measured
+/// data, and its candidate effects. Invariant: `scales` has one entry per
+/// signal, `observed` one column per signal and one row per entry of
+/// `times` (strictly increasing, seconds).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Data {
+    /// The signals compared, in [`Series`] column order.
+    pub signals: Vec<Signal>,
+    /// What each signal's residual is divided by (same order), in the
+    /// signal's unit.
+    pub scales: Vec<f64>,
+    /// Sample times [s].
+    pub times: Vec<f64>,
+    /// The measured ("real") data.
+    pub observed: Series,
+    /// The candidate effects.
+    pub candidates: Vec<Candidate>,
+}
+
 /// "The sim" of one system with the data it is compared with.
 pub trait Model: Sync {
+    /// The data compared (see the accessors below).
+    fn data(&self) -> &Data;
     /// The signals compared, in [`Series`] column order.
-    fn signals(&self) -> &[Signal];
+    fn signals(&self) -> &[Signal] {
+        &self.data().signals
+    }
     /// What each signal's residual is divided by (same order): the
     /// measurement noise σ where it is known, in the signal's unit.
-    fn scales(&self) -> &[f64];
+    fn scales(&self) -> &[f64] {
+        &self.data().scales
+    }
     /// Expected mean square of a scaled residual that is pure measurement
     /// noise: 1 where [`Model::scales`] are the noise σ, 0 where the noise
     /// is unknown (the gap is then the whole residual).
@@ -220,11 +245,17 @@ pub trait Model: Sync {
     /// Name of the gap metric (the `metric` of the output).
     fn gap_metric(&self) -> &'static str;
     /// Sample times [s], strictly increasing.
-    fn times(&self) -> &[f64];
+    fn times(&self) -> &[f64] {
+        &self.data().times
+    }
     /// The measured ("real") data.
-    fn observed(&self) -> &Series;
+    fn observed(&self) -> &Series {
+        &self.data().observed
+    }
     /// The candidate effects.
-    fn candidates(&self) -> &[Candidate];
+    fn candidates(&self) -> &[Candidate] {
+        &self.data().candidates
+    }
     /// The candidate that is part of the nominal sim itself (its
     /// parameters, e.g. a drive's mass and offset, are fitted first and
     /// refitted with every effect; it is never ranked). `None` for a sim

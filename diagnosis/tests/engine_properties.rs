@@ -4,20 +4,18 @@
 //! planted, the engine names it when it stands above the noise, answers
 //! `none` for pure noise, and measures the shrink on held-out blocks.
 
-use limb_diagnosis::model::{Applied, Candidate, Parameter, Scale, Series, Signal};
+use limb_diagnosis::model::{Applied, Candidate, Data, Parameter, Scale, Series, Signal};
 use limb_diagnosis::{select, HoldOut, Model, ModelError, Options, Problem};
 use limb_sim::noise::Gaussian;
 use proptest::prelude::*;
 
-const SIGNALS: [Signal; 1] = [Signal {
+const SIGNAL: Signal = Signal {
     name: "y",
     unit: "1",
-}];
+};
 
 struct Toy {
-    times: Vec<f64>,
-    observed: Series,
-    candidates: Vec<Candidate>,
+    data: Data,
 }
 
 fn effect(candidate: usize, value: f64, t: f64) -> f64 {
@@ -54,19 +52,20 @@ impl Toy {
             })
             .collect();
         Self {
-            times,
-            observed,
-            candidates,
+            data: Data {
+                signals: vec![SIGNAL],
+                scales: vec![1.0],
+                times,
+                observed,
+                candidates,
+            },
         }
     }
 }
 
 impl Model for Toy {
-    fn signals(&self) -> &[Signal] {
-        &SIGNALS
-    }
-    fn scales(&self) -> &[f64] {
-        &[1.0]
+    fn data(&self) -> &Data {
+        &self.data
     }
     fn noise_floor(&self) -> f64 {
         1.0
@@ -74,18 +73,10 @@ impl Model for Toy {
     fn gap_metric(&self) -> &'static str {
         "excess_rms"
     }
-    fn times(&self) -> &[f64] {
-        &self.times
-    }
-    fn observed(&self) -> &Series {
-        &self.observed
-    }
-    fn candidates(&self) -> &[Candidate] {
-        &self.candidates
-    }
     fn predict(&self, effects: &[Applied]) -> Result<Series, ModelError> {
-        let mut out = Series::with_capacity(1, self.times.len());
-        for t in &self.times {
+        let times = self.times();
+        let mut out = Series::with_capacity(1, times.len());
+        for t in times {
             let extra: f64 = effects
                 .iter()
                 .map(|a| effect(a.candidate, a.values[0], *t))

@@ -42,7 +42,7 @@ use super::filter::{derivative, zero_phase};
 use super::log::DriveLog;
 use super::lsq::solve;
 use crate::locate::median_interval;
-use crate::model::{grid, Applied, Candidate, Hints, Model, ModelError, Series, Signal};
+use crate::model::{grid, Applied, Data, Hints, Model, ModelError, Series, Signal};
 
 /// Default zero-phase cut-off of positions and force [Hz]: ten times the
 /// position loop's bandwidth of a positioning drive's motion (EMPS: a few
@@ -165,18 +165,13 @@ pub struct DriveModel {
     t: Vec<f64>,
     /// The compared samples (every D-th).
     keep: Vec<usize>,
-    /// Their times [s].
-    times: Vec<f64>,
     raw_q: Vec<f64>,
     interval: f64,
     cutoff: f64,
     kinematics: Kinematics,
     tau: Vec<f64>,
     f_ext: Option<Vec<f64>>,
-    signals: Vec<Signal>,
-    scales: Vec<f64>,
-    observed: Series,
-    candidates: Vec<Candidate>,
+    data: Data,
 }
 
 fn rms(x: &[f64], about: f64) -> f64 {
@@ -222,9 +217,9 @@ impl DriveModel {
             // One value per signal by construction.
             let _ = observed.push(&row);
         }
+        let times = keep.iter().map(|i| log.t[*i]).collect();
         Ok(Self {
             kinematics: Kinematics::of(&log.q, &log.t, interval, cutoff),
-            times: keep.iter().map(|i| log.t[*i]).collect(),
             keep,
             t: log.t.clone(),
             raw_q: log.q.clone(),
@@ -232,10 +227,13 @@ impl DriveModel {
             cutoff,
             f_ext: log.f_ext.as_deref().map(filter),
             tau,
-            signals,
-            scales,
-            observed,
-            candidates: candidates(log.q_load.is_some()),
+            data: Data {
+                signals,
+                scales,
+                times,
+                observed,
+                candidates: candidates(log.q_load.is_some()),
+            },
         })
     }
 
@@ -245,7 +243,8 @@ impl DriveModel {
     }
 
     fn name(&self, applied: &Applied) -> Result<&'static str, ModelError> {
-        self.candidates
+        self.data
+            .candidates
             .get(applied.candidate)
             .map(|c| c.name)
             .ok_or_else(|| ModelError::Effects(format!("no candidate {}", applied.candidate)))
@@ -276,7 +275,7 @@ impl DriveModel {
             None => vec![0.0; n],
         };
         let mut tau = Design::new(known);
-        let mut transmission = (self.signals.len() > 1).then(|| Design::new(vec![0.0; n]));
+        let mut transmission = (self.data.signals.len() > 1).then(|| Design::new(vec![0.0; n]));
         let map = |f: &dyn Fn(f64) -> f64| kin.v.iter().map(|v| f(*v)).collect::<Vec<f64>>();
         for (index, a) in applied.iter().enumerate() {
             let direct = Link::Direct;
@@ -351,12 +350,8 @@ fn delayed(x: &[f64], t: &[f64], delay: f64) -> Vec<f64> {
 }
 
 impl Model for DriveModel {
-    fn signals(&self) -> &[Signal] {
-        &self.signals
-    }
-
-    fn scales(&self) -> &[f64] {
-        &self.scales
+    fn data(&self) -> &Data {
+        &self.data
     }
 
     fn noise_floor(&self) -> f64 {
@@ -364,23 +359,11 @@ impl Model for DriveModel {
     }
 
     fn gap_metric(&self) -> &'static str {
-        if self.signals.len() > 1 {
+        if self.data.signals.len() > 1 {
             "nrmse_tau_transmission"
         } else {
             "nrmse_tau"
         }
-    }
-
-    fn times(&self) -> &[f64] {
-        &self.times
-    }
-
-    fn observed(&self) -> &Series {
-        &self.observed
-    }
-
-    fn candidates(&self) -> &[Candidate] {
-        &self.candidates
     }
 
     fn base(&self) -> Option<usize> {
@@ -416,6 +399,7 @@ impl Model for DriveModel {
             };
             let known = pick(&design.known);
             let target: Vec<f64> = self
+                .data
                 .observed
                 .column(signal)
                 .iter()
@@ -426,7 +410,7 @@ impl Model for DriveModel {
             let columns: Vec<&[f64]> = picked.iter().map(Vec::as_slice).collect();
             let theta = solve(&columns, &target, mask);
             for (term, coefficient) in design.terms.iter().zip(theta) {
-                let parameter = self.candidates[polished[term.effect].candidate]
+                let parameter = self.data.candidates[polished[term.effect].candidate]
                     .parameters
                     .get(term.parameter)?;
                 let value = match term.link {
@@ -442,10 +426,10 @@ impl Model for DriveModel {
     }
 
     fn starts(&self, candidate: usize, _hints: &Hints) -> Vec<Vec<f64>> {
-        match self.candidates.get(candidate).map(|c| c.name) {
+        match self.data.candidates.get(candidate).map(|c| c.name) {
             // Only linear parameters: least squares finds them from anywhere.
             Some(RIGID | "viscous_friction" | "coulomb_friction" | "asymmetric_friction") => {
-                let dimension = self.candidates[candidate].parameters.len();
+                let dimension = self.data.candidates[candidate].parameters.len();
                 vec![vec![0.5; dimension]]
             }
             // One searched parameter (`fs` is solved): a fine grid on `vs`.
@@ -453,7 +437,7 @@ impl Model for DriveModel {
             // Rounded readings: the step is the lattice they sit on (off
             // it the effect does nothing, so a grid would find nothing).
             Some("quantization") => {
-                let parameter = &self.candidates[candidate].parameters[0];
+                let parameter = &self.data.candidates[candidate].parameters[0];
                 encoder_step(&self.raw_q)
                     .map(|step| vec![vec![parameter.unit_of(step)]])
                     .unwrap_or_else(|| grid(1, 3))
