@@ -6,9 +6,12 @@
 //! cargo bench -p limb-diagnosis --bench diagnose
 //! ```
 //!
+//! The medians are written to `benchmarks/diagnose.md`, which the READMEs
+//! show.
+//!
 //! The log: `shared/data/effects/backlash.csv` (2 917 samples, 29.16 s).
 
-use criterion::{criterion_group, criterion_main, Criterion};
+use criterion::Criterion;
 use limb_diagnosis::arm::ArmModel;
 use limb_diagnosis::verdict::diagnose;
 use limb_diagnosis::Model;
@@ -51,5 +54,49 @@ fn benches(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(diagnosis, benches);
-criterion_main!(diagnosis);
+/// Criterion's median of one benchmark of the group [s].
+fn median(function: &str) -> Option<f64> {
+    let target = std::env::var("CARGO_TARGET_DIR")
+        .unwrap_or_else(|_| concat!(env!("CARGO_MANIFEST_DIR"), "/../target").to_string());
+    let path = format!("{target}/criterion/diagnose_29s_log/{function}/new/estimates.json");
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(path).ok()?).ok()?;
+    json["median"]["point_estimate"].as_f64().map(|ns| ns * 1e-9)
+}
+
+fn write_figures() {
+    let (Some(plant), Some(one), Some(two)) = (
+        median("one_plant_run"),
+        median("all_candidates_1_threads"),
+        median("all_candidates_2_threads"),
+    ) else {
+        eprintln!("criterion estimates missing: benchmarks/diagnose.md not written");
+        return;
+    };
+    let report = format!(
+        "# Diagnosis benchmark\n\n`cargo bench -p limb-diagnosis --bench diagnose` on this machine \
+         (criterion medians, 10 samples each, all three in one process). The log: \
+         `shared/data/effects/backlash.csv` (2 917 samples, 29.16 s), all ten candidates.\n\n\
+         | measured | median |\n|---|---|\n\
+         | one run of the reference plant over the log (the unit of work) | {:.2} ms |\n\
+         | diagnosis, all candidates, 1 thread | {one:.2} s |\n\
+         | diagnosis, all candidates, 2 threads | {two:.2} s |\n\n\
+         Ratios: 1 thread = {:.0} plant runs; 2 threads are {:.2}× faster than 1.\n",
+        plant * 1e3,
+        one / plant,
+        one / two
+    );
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../benchmarks/diagnose.md");
+    if let Err(error) = std::fs::write(path, report) {
+        eprintln!("could not write {path}: {error}");
+    }
+}
+
+fn main() {
+    let mut criterion = Criterion::default().configure_from_args();
+    benches(&mut criterion);
+    criterion.final_summary();
+    let measuring = !std::env::args().any(|a| a == "--test" || a == "--list");
+    if measuring {
+        write_figures();
+    }
+}
