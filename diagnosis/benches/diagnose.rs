@@ -59,8 +59,11 @@ fn median(function: &str) -> Option<f64> {
     let target = std::env::var("CARGO_TARGET_DIR")
         .unwrap_or_else(|_| concat!(env!("CARGO_MANIFEST_DIR"), "/../target").to_string());
     let path = format!("{target}/criterion/diagnose_29s_log/{function}/new/estimates.json");
-    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(path).ok()?).ok()?;
-    json["median"]["point_estimate"].as_f64().map(|ns| ns * 1e-9)
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(path).ok()?).ok()?;
+    json["median"]["point_estimate"]
+        .as_f64()
+        .map(|ns| ns * 1e-9)
 }
 
 fn write_figures() {
