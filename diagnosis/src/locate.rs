@@ -143,6 +143,7 @@ pub fn locate(model: &dyn Model, residual: &Series) -> (Location, Hints) {
         .max_by(|a, b| a.share.total_cmp(&b.share))
     {
         hints.frequency = Some(strongest.peak);
+        hints.band = Some(strongest.band);
         location.band_hz = Some(strongest.band);
     }
     (location, hints)

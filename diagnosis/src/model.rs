@@ -204,6 +204,9 @@ pub struct Hints {
     pub onset: Option<f64>,
     /// Frequency of the residual's spectral peak [Hz], when one stands out.
     pub frequency: Option<f64>,
+    /// The band around that peak holding its power [Hz], when the
+    /// residual concentrates in one (the location's `band_hz`).
+    pub band: Option<[f64; 2]>,
 }
 
 /// What a model compares: its signals and their scales, the measured

@@ -134,8 +134,17 @@ fn pick(random: &mut Gaussian, count: usize) -> usize {
     ((random.uniform() * count as f64) as usize).min(count.saturating_sub(1))
 }
 
-/// The log of one case (noise on, ground truth dropped).
-fn simulate(l1: f64, l2: f64, seed: u64, effect: Option<Effect>) -> Result<Vec<Record>, String> {
+/// The log of one case: the reference plant with arm lengths `l1`, `l2`
+/// [m], noise seed `seed` and `effect`, noise on, ground truth dropped.
+///
+/// # Errors
+/// The plant's refusal of the arm or the effect, in words.
+pub fn simulate(
+    l1: f64,
+    l2: f64,
+    seed: u64,
+    effect: Option<Effect>,
+) -> Result<Vec<Record>, String> {
     let mut params = PlantParameters::new(l1, l2);
     params.seed = seed;
     let effects = Effects::new(effect.as_slice()).map_err(|e| e.to_string())?;
