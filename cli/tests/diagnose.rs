@@ -1,6 +1,8 @@
 //! `limb diagnose` against `../shared/spec/cli.md`: the JSON contract,
 //! the report, the blind self-check and exit code 2 on bad input.
 
+mod common;
+
 use std::process::Command;
 
 const EFFECTS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/data/effects");
@@ -33,13 +35,7 @@ fn json_has_the_contract_keys_and_the_report_is_written() {
         "--report",
         report.to_str().unwrap(),
     ]);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let json: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    let json = common::json_of(&out);
     assert_eq!(json["effect"], "backlash");
     let ranking = json["ranking"].as_array().unwrap();
     assert_eq!(ranking.len(), 10);

@@ -1,4 +1,6 @@
 //! `limb diagnose-drive`: bad input is one line naming file and line, exit 2.
+
+mod common;
 use std::process::Command;
 
 #[test]
@@ -49,13 +51,7 @@ fn emps_json_has_the_drive_shape_and_the_report_is_written() {
         ])
         .output()
         .unwrap();
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let json: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    let json = common::json_of(&out);
     let effects = json["effects"].as_array().unwrap();
     let names: Vec<&str> = effects
         .iter()

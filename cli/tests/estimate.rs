@@ -1,5 +1,7 @@
 //! `limb estimate` against `../shared/spec/cli.md`: JSON keys, exit codes.
 
+mod common;
+
 use std::process::Command;
 
 const CASE3: &str = concat!(
@@ -18,13 +20,7 @@ fn limb(args: &[&str]) -> std::process::Output {
 fn json_has_the_contract_keys_for_every_method() {
     for method in ["hough", "ls", "auto"] {
         let out = limb(&["estimate", CASE3, "--method", method, "--json"]);
-        assert_eq!(
-            out.status.code(),
-            Some(0),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let json: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+        let json = common::json_of(&out);
         assert!((json["l1"].as_f64().unwrap() - 0.300).abs() < 1e-3);
         assert!((json["l2"].as_f64().unwrap() - 0.200).abs() < 1e-3);
         for key in ["elbow", "shoulder"] {
