@@ -53,7 +53,7 @@ pub struct Diagnosis {
 }
 
 impl Diagnosis {
-    fn from_selection(selection: Selection, hold_out: HoldOut) -> Self {
+    fn from_selection(selection: &Selection, hold_out: HoldOut) -> Self {
         let effect = selection
             .effects
             .first()
@@ -62,13 +62,12 @@ impl Diagnosis {
             effect,
             ranking: selection
                 .steps
-                .into_iter()
-                .next()
-                .map(|s| s.ranking)
+                .first()
+                .map(|s| s.ranking.clone())
                 .unwrap_or_default(),
-            location: selection.location,
-            gap: selection.gap,
-            remaining: selection.remaining,
+            location: selection.location.clone(),
+            gap: selection.gap.clone(),
+            remaining: selection.remaining.clone(),
             held_out: format!(
                 "alternating {} s blocks: even blocks fit, odd blocks score",
                 hold_out.block
@@ -112,7 +111,7 @@ pub fn diagnose(
         };
         select(&problem, &options, progress)?
     };
-    let diagnosis = Diagnosis::from_selection(selection.clone(), hold_out);
+    let diagnosis = Diagnosis::from_selection(&selection, hold_out);
     Ok(Diagnosed {
         model,
         selection,

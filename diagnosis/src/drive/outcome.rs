@@ -166,7 +166,7 @@ pub fn diagnose(
             (fit_model, selection, text)
         }
     };
-    let diagnosis = answer(selection.clone(), held_out_data, scored.cutoff());
+    let diagnosis = answer(&selection, held_out_data, scored.cutoff());
     Ok(Diagnosed {
         scored,
         selection,
@@ -174,7 +174,9 @@ pub fn diagnose(
     })
 }
 
-fn answer(selection: Selection, held_out_data: String, cutoff_hz: f64) -> Diagnosis {
+/// The answer from the engine's selection (its predictions stay with the
+/// caller, for the report).
+fn answer(selection: &Selection, held_out_data: String, cutoff_hz: f64) -> Diagnosis {
     let mut effects: Vec<AddedEffect> = selection
         .effects
         .iter()
@@ -193,14 +195,13 @@ fn answer(selection: Selection, held_out_data: String, cutoff_hz: f64) -> Diagno
             held_out_after: selection.gap.after,
         });
     }
-    let unexplained = unexplained(&selection, cutoff_hz);
     Diagnosis {
         effects,
-        nominal: selection.nominal,
-        unexplained,
-        location: selection.location,
-        remaining: selection.remaining,
-        gap: selection.gap,
+        nominal: selection.nominal.clone(),
+        unexplained: unexplained(selection, cutoff_hz),
+        location: selection.location.clone(),
+        remaining: selection.remaining.clone(),
+        gap: selection.gap.clone(),
         held_out_data,
         cutoff_hz,
     }
