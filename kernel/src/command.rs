@@ -1,5 +1,6 @@
 //! What the kernel asks of the robot for one step.
 
+use crate::config::SafetyLimits;
 use crate::geometry::Wrench;
 use crate::impedance::Saturation;
 use crate::motion::SetPoint;
@@ -49,5 +50,76 @@ impl Command {
             && self.set_point.is_none_or(|s| {
                 s.pose.is_finite() && s.velocity.is_finite() && s.acceleration.is_finite()
             })
+    }
+}
+
+/// Relative slack for comparisons against saturation limits (rounding of
+/// the scaling by limit / magnitude).
+const ROUNDING: f64 = 1e-12;
+
+impl Command {
+    /// The invariants above as an executable check against `limits`
+    /// (REQ-CMD-001, REQ-CMD-003): [`Command::check_components`] and the
+    /// force magnitude within `max_force`. The proptest properties
+    /// (`limb-verification`) assert this function.
+    ///
+    /// # Errors
+    /// The first invariant that does not hold, in words.
+    pub fn check(&self, limits: &SafetyLimits) -> Result<(), &'static str> {
+        self.check_components(limits)?;
+        if self.wrench.force_magnitude() <= limits.max_force * (1.0 + ROUNDING) {
+            Ok(())
+        } else {
+            Err("commanded force exceeds the force limit")
+        }
+    }
+
+    /// The invariants that need no square root, which the Kani harnesses of
+    /// [`crate::kernel`] prove (the proofs replace `hypot` by a stub, so
+    /// the force magnitude is the proptest's to check): every number
+    /// finite; each force component and the torque within their limits;
+    /// zero set-point velocity and acceleration unless tracking; the stop
+    /// mode exactly in SafeStop, with zero wrench.
+    ///
+    /// # Errors
+    /// The first invariant that does not hold, in words.
+    pub fn check_components(&self, limits: &SafetyLimits) -> Result<(), &'static str> {
+        let ensure = |condition: bool, failure| if condition { Ok(()) } else { Err(failure) };
+        ensure(self.is_finite(), "command is not finite")?;
+        let w = self.wrench;
+        let force_bound = limits.max_force * (1.0 + ROUNDING);
+        ensure(
+            libm::fabs(w.fx) <= force_bound && libm::fabs(w.fz) <= force_bound,
+            "a commanded force component exceeds the force limit",
+        )?;
+        ensure(
+            libm::fabs(w.ty) <= limits.max_torque * (1.0 + ROUNDING),
+            "commanded torque exceeds the torque limit",
+        )?;
+        let still = |s: &SetPoint| {
+            s.velocity.x == 0.0
+                && s.velocity.z == 0.0
+                && s.velocity.psi == 0.0
+                && s.acceleration.x == 0.0
+                && s.acceleration.z == 0.0
+                && s.acceleration.psi == 0.0
+        };
+        if self.mode != CommandMode::Track {
+            ensure(
+                self.set_point.as_ref().is_none_or(still),
+                "a hold or stop command moves the set-point",
+            )?;
+        }
+        ensure(
+            (self.mode == CommandMode::Stop) == (self.state == StateKind::SafeStop),
+            "stop mode and SafeStop disagree",
+        )?;
+        if self.mode == CommandMode::Stop {
+            ensure(
+                w.fx == 0.0 && w.fz == 0.0 && w.ty == 0.0,
+                "a stop command applies a wrench",
+            )?;
+        }
+        Ok(())
     }
 }

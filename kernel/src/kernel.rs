@@ -482,3 +482,439 @@ fn stop_command(hold: Option<SetPoint>) -> Command {
         saturation: Saturation::default(),
     }
 }
+
+#[cfg(any(test, kani))]
+impl Kernel {
+    /// A kernel with the default configuration in `state`, as if a session
+    /// had reached it: proofs start there without running one.
+    pub(crate) fn in_state(state: State) -> Self {
+        let mut kernel =
+            Self::new(KernelConfig::default()).expect("the default configuration is valid");
+        kernel.state = state;
+        kernel
+    }
+}
+
+/// Proofs of the runtime wrapper: one step from each state, requests,
+/// the latch and limit updates.
+///
+/// Unwind bounds: a kernel is built by [`Kernel::new`], whose configuration
+/// check runs over at most 8 values per group (9), and the fixed validated
+/// arm by the validator, which checks 15 values (16); one step pushes one
+/// frame into an empty rate window (its trimming loop runs at most once)
+/// and loops over 3 axes in the impedance law. No harness lets the
+/// estimation motion end (that step runs the estimator over the path: the
+/// estimator's own harness covers it).
+#[cfg(any(test, kani))]
+mod verification {
+    use super::*;
+    use crate::kani_inputs::{
+        any_frame, any_frame_or_at, any_request, validated_arm, HOLD, MANIPULATION_TARGET,
+    };
+    use crate::state::Validated;
+    #[cfg(not(kani))]
+    use limb_kani_stand_in as kani;
+
+    /// Where the arm rests at the start of a session (frame S origin).
+    const REST: Pose = Pose::new(0.0, 0.0, 0.0);
+
+    /// REQ-MON-006, REQ-MON-007, REQ-CMD-001: what one step must give for
+    /// `frame` at `now` from a state of kind `before`, decided without a
+    /// square root: the command's invariants
+    /// ([`Command::check_components`]), the stop command from SafeStop, and
+    /// a stop in the same step for any fault visible without a model (bad
+    /// clock or frame, stale or future frame, a force component, the torque
+    /// or the grasp point beyond its limit).
+    pub fn check_step(
+        before: StateKind,
+        frame: &PathSample,
+        now: f64,
+        command: &Command,
+        limits: &SafetyLimits,
+    ) -> Result<(), &'static str> {
+        command.check_components(limits)?;
+        let (p, w) = (frame.pose, frame.wrench);
+        let age = now - frame.time;
+        let floor = -limits.table_tolerance;
+        let fault = !(now.is_finite()
+            && frame.time.is_finite()
+            && p.is_finite()
+            && w.is_finite()
+            && (0.0..=limits.max_sensor_age).contains(&age)
+            && libm::fabs(w.fx) <= limits.max_force
+            && libm::fabs(w.fz) <= limits.max_force
+            && libm::fabs(w.ty) <= limits.max_torque
+            && p.z >= floor
+            && limits.workspace_x.contains(p.x)
+            && limits.workspace_z.contains(p.z));
+        if (fault || before == StateKind::SafeStop) && command.state != StateKind::SafeStop {
+            return Err("a fault or SafeStop did not give the stop command");
+        }
+        Ok(())
+    }
+
+    /// One step with any frame (or a plausible one at `at`) at any clock
+    /// (or at `t`), checked by [`check_step`].
+    fn one_step(mut kernel: Kernel, at: Pose, t: f64) -> Command {
+        let before = kernel.state().kind();
+        let now = if kani::any() { t } else { kani::any() };
+        let frame = any_frame_or_at(at, now);
+        let command = kernel.step(&frame, now);
+        assert_eq!(command.state, kernel.state().kind());
+        assert_eq!(
+            check_step(before, &frame, now, &command, &kernel.config().limits),
+            Ok(())
+        );
+        command
+    }
+
+    fn validated_kernel() -> Kernel {
+        Kernel::in_state(State::Validated(Validated::holding(validated_arm(), HOLD)))
+    }
+
+    /// Grasp, Estimate (from the rest pose at t = 0), Validated (the fixed
+    /// arm at [`HOLD`]) or Manipulate (towards the fixed target), with
+    /// where the arm is; Manipulate only where the target is accepted.
+    fn kernel_in(kind: StateKind) -> (Kernel, Pose) {
+        match kind {
+            StateKind::Grasp => (Kernel::in_state(State::Grasp(Grasp::new())), REST),
+            StateKind::Estimate => {
+                let estimate = Grasp::new().start_estimation(
+                    REST,
+                    0.0,
+                    &KernelConfig::default().estimation_motion,
+                );
+                kani::assume(estimate.is_ok());
+                let estimate = estimate.expect("assumed");
+                (Kernel::in_state(State::Estimate(estimate)), REST)
+            }
+            StateKind::Validated => (validated_kernel(), HOLD),
+            StateKind::Manipulate => {
+                let mut kernel = validated_kernel();
+                let approved =
+                    kernel.request(Request::ApproveManipulation(MANIPULATION_TARGET), 0.0);
+                kani::assume(approved == Ok(StateKind::Manipulate));
+                (kernel, HOLD)
+            }
+            StateKind::SafeStop => {
+                let mut kernel = validated_kernel();
+                assert_eq!(kernel.request(Request::Stop, 0.0), Ok(StateKind::SafeStop));
+                (kernel, HOLD)
+            }
+        }
+    }
+
+    /// REQ-PANIC-001, REQ-CMD-001, REQ-MON-006, REQ-MON-007: one step from
+    /// Grasp with any frame and clock never panics, commands within the
+    /// limits and stops on any fault in the same step.
+    #[cfg_attr(kani, kani::proof)]
+    #[cfg_attr(kani, kani::unwind(9))]
+    #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
+    #[cfg_attr(kani, kani::stub(libm::sqrt, crate::kani_stubs::stub::sqrt))]
+    pub fn verify_req_panic_001_step_from_grasp() {
+        let (kernel, at) = kernel_in(StateKind::Grasp);
+        let command = one_step(kernel, at, 0.0);
+        kani::cover!(command.state == StateKind::Grasp, "grasp step: holds");
+        kani::cover!(command.state == StateKind::SafeStop, "grasp step: stops");
+    }
+
+    /// REQ-PANIC-001, REQ-CMD-001, REQ-MON-006, REQ-MON-007: one step
+    /// during the estimation motion (before it ends) with any frame and
+    /// clock never panics, commands within the limits and stops on any
+    /// fault in the same step.
+    #[cfg_attr(kani, kani::proof)]
+    #[cfg_attr(kani, kani::unwind(9))]
+    #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
+    #[cfg_attr(kani, kani::stub(libm::sqrt, crate::kani_stubs::stub::sqrt))]
+    #[cfg_attr(kani, kani::stub(libm::sin, crate::kani_stubs::stub::sin))]
+    #[cfg_attr(kani, kani::stub(libm::cos, crate::kani_stubs::stub::cos))]
+    pub fn verify_req_panic_001_step_during_estimation() {
+        let (kernel, at) = kernel_in(StateKind::Estimate);
+        let State::Estimate(estimate) = *kernel.state() else {
+            unreachable!("kernel_in(Estimate) is in Estimate")
+        };
+        let now: f64 = if kani::any() { 0.5 } else { kani::any() };
+        // The step that ends the motion runs the estimator: not this proof's.
+        kani::assume(!estimate.is_finished(now));
+        let before = kernel.state().kind();
+        let mut kernel = kernel;
+        let frame = any_frame_or_at(at, now);
+        let command = kernel.step(&frame, now);
+        assert_eq!(
+            check_step(before, &frame, now, &command, &kernel.config().limits),
+            Ok(())
+        );
+        kani::cover!(
+            command.state == StateKind::Estimate,
+            "estimate step: tracks"
+        );
+        kani::cover!(command.state == StateKind::SafeStop, "estimate step: stops");
+    }
+
+    /// REQ-PANIC-001, REQ-CMD-001, REQ-MON-006, REQ-MON-007: one step in
+    /// Validated with any frame and clock never panics, commands within the
+    /// limits and stops on any fault in the same step.
+    #[cfg_attr(kani, kani::proof)]
+    #[cfg_attr(kani, kani::unwind(16))]
+    #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
+    #[cfg_attr(kani, kani::stub(libm::sqrt, crate::kani_stubs::stub::sqrt))]
+    #[cfg_attr(kani, kani::stub(libm::atan2, crate::kani_stubs::stub::atan2))]
+    #[cfg_attr(kani, kani::stub(libm::sin, crate::kani_stubs::stub::sin))]
+    #[cfg_attr(kani, kani::stub(libm::cos, crate::kani_stubs::stub::cos))]
+    pub fn verify_req_panic_001_step_in_validated() {
+        let (kernel, at) = kernel_in(StateKind::Validated);
+        let command = one_step(kernel, at, 0.0);
+        kani::cover!(
+            command.state == StateKind::Validated,
+            "validated step: holds"
+        );
+        kani::cover!(
+            command.state == StateKind::SafeStop,
+            "validated step: stops"
+        );
+    }
+
+    /// REQ-PANIC-001, REQ-CMD-001, REQ-MON-006, REQ-MON-007: one step while
+    /// manipulating with any frame and clock never panics, commands within
+    /// the limits and stops on any fault in the same step.
+    #[cfg_attr(kani, kani::proof)]
+    #[cfg_attr(kani, kani::unwind(16))]
+    #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
+    #[cfg_attr(kani, kani::stub(libm::sqrt, crate::kani_stubs::stub::sqrt))]
+    #[cfg_attr(kani, kani::stub(libm::atan2, crate::kani_stubs::stub::atan2))]
+    #[cfg_attr(kani, kani::stub(libm::sin, crate::kani_stubs::stub::sin))]
+    #[cfg_attr(kani, kani::stub(libm::cos, crate::kani_stubs::stub::cos))]
+    pub fn verify_req_panic_001_step_while_manipulating() {
+        let (kernel, at) = kernel_in(StateKind::Manipulate);
+        let command = one_step(kernel, at, 0.001);
+        kani::cover!(
+            command.state == StateKind::Manipulate,
+            "manipulate step: tracks"
+        );
+        kani::cover!(
+            command.state == StateKind::SafeStop,
+            "manipulate step: stops"
+        );
+    }
+
+    /// REQ-SM-006, REQ-CMD-003: once stopped, steps with any frames and
+    /// clocks and any requests but Reset give the same zero-wrench,
+    /// zero-motion stop command.
+    #[cfg_attr(kani, kani::proof)]
+    #[cfg_attr(kani, kani::unwind(16))]
+    #[cfg_attr(kani, kani::stub(libm::sqrt, crate::kani_stubs::stub::sqrt))]
+    #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
+    pub fn verify_req_sm_006_safe_stop_is_latched() {
+        let (mut kernel, _) = kernel_in(StateKind::SafeStop);
+        let limits = kernel.config().limits;
+        let first = kernel.step(&any_frame(), kani::any());
+        assert_eq!(first.check_components(&limits), Ok(()));
+        assert_eq!(first.mode, CommandMode::Stop);
+        // Two rounds: a request, then a step (no loop: nothing to unwind).
+        let request = any_request();
+        kani::assume(request != Request::Reset);
+        let _ = kernel.request(request, kani::any());
+        assert_eq!(kernel.step(&any_frame(), kani::any()), first);
+        let request = any_request();
+        kani::assume(request != Request::Reset);
+        let _ = kernel.request(request, kani::any());
+        assert_eq!(kernel.step(&any_frame(), kani::any()), first);
+        kani::cover!(
+            first.set_point == Some(SetPoint::hold(HOLD)),
+            "latch: holds the pose"
+        );
+    }
+
+    fn any_state_kind() -> StateKind {
+        StateKind::ALL[usize::from(kani::any::<u8>() % 5)]
+    }
+
+    /// REQ-SM-005, REQ-SM-002: from any state, any request at any clock
+    /// reaches Validated or Manipulate only from a state that already holds
+    /// the same validated model (Manipulate only from Validated by an
+    /// approved target), and a refusal names the request and the state and
+    /// changes nothing.
+    #[cfg_attr(kani, kani::proof)]
+    #[cfg_attr(kani, kani::unwind(16))]
+    #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
+    #[cfg_attr(kani, kani::stub(libm::sqrt, crate::kani_stubs::stub::sqrt))]
+    #[cfg_attr(kani, kani::stub(libm::atan2, crate::kani_stubs::stub::atan2))]
+    #[cfg_attr(kani, kani::stub(libm::sin, crate::kani_stubs::stub::sin))]
+    #[cfg_attr(kani, kani::stub(libm::cos, crate::kani_stubs::stub::cos))]
+    pub fn verify_req_sm_005_no_manipulation_without_a_validated_model() {
+        let (mut kernel, _) = kernel_in(any_state_kind());
+        let before = *kernel.state();
+        let request = any_request();
+        let result = kernel.request(request, if kani::any() { 0.01 } else { kani::any() });
+        let after = kernel.state();
+        match after.kind() {
+            StateKind::Validated | StateKind::Manipulate => {
+                assert!(after.arm().is_some());
+                assert_eq!(
+                    after.arm(),
+                    before.arm(),
+                    "a model appeared without validation"
+                );
+            }
+            _ => {}
+        }
+        if after.kind() == StateKind::Manipulate && before.kind() != StateKind::Manipulate {
+            assert_eq!(before.kind(), StateKind::Validated);
+            assert!(matches!(request, Request::ApproveManipulation(_)));
+        }
+        if let Err(refusal) = result {
+            assert_eq!(*after, before, "a refused request changed the state");
+            // The request by its kind (a refused target may hold NaN).
+            assert_eq!(
+                core::mem::discriminant(&refusal.request),
+                core::mem::discriminant(&request)
+            );
+            assert_eq!(refusal.state, before.kind());
+        }
+        kani::cover!(
+            before.kind() == StateKind::Validated && after.kind() == StateKind::Manipulate,
+            "gating: Manipulate approved"
+        );
+        kani::cover!(result.is_err(), "gating: refused");
+    }
+
+    /// REQ-SM-004: a request at a non-finite or backwards clock is refused
+    /// for an invalid time, except a stop and the reset of a stop.
+    #[cfg_attr(kani, kani::proof)]
+    #[cfg_attr(kani, kani::unwind(16))]
+    #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
+    #[cfg_attr(kani, kani::stub(libm::sqrt, crate::kani_stubs::stub::sqrt))]
+    #[cfg_attr(kani, kani::stub(libm::atan2, crate::kani_stubs::stub::atan2))]
+    #[cfg_attr(kani, kani::stub(libm::sin, crate::kani_stubs::stub::sin))]
+    #[cfg_attr(kani, kani::stub(libm::cos, crate::kani_stubs::stub::cos))]
+    pub fn verify_req_sm_004_requests_need_a_sane_clock() {
+        let (mut kernel, _) = kernel_in(any_state_kind());
+        let kind = kernel.state().kind();
+        let last = 1.0;
+        kernel.last_now = Some(last);
+        let now: f64 = kani::any();
+        let request = any_request();
+        let result = kernel.request(request, now);
+        let exempt =
+            request == Request::Stop || (request == Request::Reset && kind == StateKind::SafeStop);
+        let sane = now.is_finite() && now >= last;
+        if !(sane || exempt) {
+            assert_eq!(
+                result.map_err(|r| r.reason),
+                Err(RefusalReason::InvalidTime)
+            );
+            kani::cover!(true, "clock: refused");
+        }
+        kani::cover!(
+            exempt && !now.is_finite() && result.is_ok(),
+            "clock: stop honoured"
+        );
+    }
+
+    /// REQ-SM-007: new limits are taken only in Grasp, Validated or
+    /// SafeStop and only when the whole configuration passes its check;
+    /// otherwise the configuration is unchanged.
+    #[cfg_attr(kani, kani::proof)]
+    #[cfg_attr(kani, kani::unwind(16))]
+    #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
+    #[cfg_attr(kani, kani::stub(libm::sqrt, crate::kani_stubs::stub::sqrt))]
+    #[cfg_attr(kani, kani::stub(libm::atan2, crate::kani_stubs::stub::atan2))]
+    #[cfg_attr(kani, kani::stub(libm::sin, crate::kani_stubs::stub::sin))]
+    #[cfg_attr(kani, kani::stub(libm::cos, crate::kani_stubs::stub::cos))]
+    pub fn verify_req_sm_007_limits_change_only_while_held() {
+        let (mut kernel, _) = kernel_in(any_state_kind());
+        let before = *kernel.config();
+        let mut limits = before.limits;
+        // Any force limit, speed limit and elbow range (the others follow
+        // the same check); or the defaults, which are valid.
+        if kani::any() {
+            limits.max_force = kani::any();
+            limits.max_speed = kani::any();
+            limits.elbow_flexion = crate::config::Interval::new(kani::any(), kani::any());
+        }
+        let kind = kernel.state().kind();
+        let result = kernel.update_limits(limits);
+        let held = matches!(
+            kind,
+            StateKind::Grasp | StateKind::Validated | StateKind::SafeStop
+        );
+        let valid = KernelConfig { limits, ..before }.check().is_ok();
+        assert_eq!(result.is_ok(), held && valid);
+        if result.is_ok() {
+            assert_eq!(kernel.config().limits, limits);
+        } else {
+            assert_eq!(*kernel.config(), before);
+        }
+        kani::cover!(result.is_ok(), "limits: taken");
+        kani::cover!(
+            result == Err(LimitUpdateRefusal::NotAllowedInState(StateKind::Manipulate)),
+            "limits: refused while moving"
+        );
+    }
+
+    #[cfg(test)]
+    mod tests {
+        use super::*;
+        use proptest::prelude::*;
+
+        #[test]
+        fn harnesses_under_the_stand_in() {
+            kani::check(
+                "step from grasp",
+                5_000,
+                verify_req_panic_001_step_from_grasp,
+            );
+            kani::check(
+                "step during estimation",
+                5_000,
+                verify_req_panic_001_step_during_estimation,
+            );
+            kani::check(
+                "step in validated",
+                5_000,
+                verify_req_panic_001_step_in_validated,
+            );
+            kani::check(
+                "step while manipulating",
+                5_000,
+                verify_req_panic_001_step_while_manipulating,
+            );
+            kani::check("latch", 2_000, verify_req_sm_006_safe_stop_is_latched);
+            kani::check(
+                "gating",
+                5_000,
+                verify_req_sm_005_no_manipulation_without_a_validated_model,
+            );
+            kani::check("clock", 5_000, verify_req_sm_004_requests_need_a_sane_clock);
+            kani::check(
+                "limits",
+                5_000,
+                verify_req_sm_007_limits_change_only_while_held,
+            );
+        }
+
+        proptest! {
+            /// REQ-MON-007, REQ-CMD-001: with the real libm a step from each
+            /// state meets the proofs' check and the command its full check
+            /// (the force magnitude included).
+            #[test]
+            fn req_mon_007_one_step_from_each_state_meets_the_check(
+                kind in 0..4usize, dx in -0.1..0.1f64, dz in -0.1..0.1f64, dpsi in -0.2..0.2f64,
+                fx in -60.0..60.0f64, fz in -60.0..60.0f64, ty in -10.0..10.0f64,
+                age in -0.01..0.03f64, now in 0.0..2.0f64,
+            ) {
+                let (mut kernel, at) = kernel_in(StateKind::ALL[kind]);
+                let before = kernel.state().kind();
+                let frame = PathSample {
+                    time: now - age,
+                    pose: Pose::new(at.x + dx, at.z + dz, at.psi + dpsi),
+                    wrench: Wrench::new(fx, fz, ty),
+                };
+                let command = kernel.step(&frame, now);
+                let limits = kernel.config().limits;
+                prop_assert_eq!(check_step(before, &frame, now, &command, &limits), Ok(()));
+                prop_assert_eq!(command.check(&limits), Ok(()));
+            }
+        }
+    }
+}

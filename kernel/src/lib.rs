@@ -23,6 +23,16 @@
 //! [`validate`] (the only maker of [`validate::ValidatedArm`]), [`state`]
 //! (typed states and transitions), [`monitor`], [`impedance`], [`command`],
 //! [`trace`], [`config`], and [`kernel`] (the runtime wrapper).
+//!
+//! # Verification beside the code
+//! Each module that carries a safety requirement ends in a
+//! `#[cfg(any(test, kani))] mod verification`: Kani proof harnesses named
+//! `verify_req_<id>_…` for the requirement they prove, the checking
+//! functions they assert, and (under `cargo test`) the proptest properties
+//! that call the same checking functions plus a run of every harness
+//! through the sampling stand-in (`limb-kani-stand-in`). `cargo kani` from
+//! the workspace root proves them; `kani_stubs` states the contracts of the
+//! libm functions the proofs replace.
 
 #![no_std]
 #![forbid(unsafe_code)]
@@ -35,12 +45,21 @@
     deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
 )]
 
+// Kani's library under `cargo kani` (the crate is no_std, so it is not in
+// the prelude by itself).
+#[cfg(kani)]
+extern crate kani;
+
 pub mod arm;
 pub mod command;
 pub mod config;
 pub mod estimation;
 pub mod geometry;
 pub mod impedance;
+#[cfg(any(test, kani))]
+mod kani_inputs;
+#[cfg(any(test, kani))]
+mod kani_stubs;
 pub mod kernel;
 pub mod monitor;
 pub mod motion;

@@ -323,3 +323,106 @@ impl SafeStop {
         Grasp::new()
     }
 }
+
+#[cfg(any(test, kani))]
+impl Validated {
+    /// Validated with the validator's `arm`, held at `hold`: the state a
+    /// session reaches after estimation, for proofs that start there
+    /// without running a session (the arm still comes only from
+    /// [`validate`]).
+    pub(crate) fn holding(arm: ValidatedArm, hold: Pose) -> Self {
+        Self { arm, hold }
+    }
+}
+
+/// Proof of REQ-SM-003 and REQ-SM-006 at the level of the typed states.
+#[cfg(any(test, kani))]
+mod verification {
+    use super::*;
+    use crate::config::SafetyLimits;
+    use crate::kani_inputs::{validated_arm, HOLD, MANIPULATION_TARGET};
+    #[cfg(not(kani))]
+    use limb_kani_stand_in as kani;
+
+    /// REQ-SM-003: for any target a manipulation plan exists only for
+    /// finite targets whose goal passes the joint-limit and workspace
+    /// checks, and it moves from the hold pose. Unwind 16: the validator
+    /// that makes the fixed arm checks 15 values for finiteness.
+    #[cfg_attr(kani, kani::proof)]
+    #[cfg_attr(kani, kani::unwind(16))]
+    #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
+    #[cfg_attr(kani, kani::stub(libm::atan2, crate::kani_stubs::stub::atan2))]
+    #[cfg_attr(kani, kani::stub(libm::sin, crate::kani_stubs::stub::sin))]
+    #[cfg_attr(kani, kani::stub(libm::cos, crate::kani_stubs::stub::cos))]
+    pub fn verify_req_sm_003_targets_are_checked() {
+        let l = SafetyLimits::default();
+        let joints = JointLimitMonitor {
+            shoulder_elevation: l.shoulder_elevation,
+            elbow_flexion: l.elbow_flexion,
+            max_model_mismatch: l.max_model_mismatch,
+        };
+        let workspace = WorkspaceMonitor {
+            x: l.workspace_x,
+            z: l.workspace_z,
+            table_tolerance: l.table_tolerance,
+        };
+        let validated = Validated::holding(validated_arm(), HOLD);
+        let target = if kani::any() {
+            JointAngles {
+                shoulder_elevation: kani::any(),
+                elbow_flexion: kani::any(),
+            }
+        } else {
+            MANIPULATION_TARGET
+        };
+        let plan = validated.plan_manipulation(target, 0.05, &joints, &workspace);
+        if let Ok(plan) = plan {
+            assert!(target.is_finite(), "a non-finite target was planned");
+            assert_eq!(plan.motion.start(), HOLD);
+            assert!(plan.motion.goal().is_finite());
+        }
+        kani::cover!(plan.is_ok(), "target: planned");
+        kani::cover!(
+            matches!(plan, Err(TargetError::JointLimits(_))),
+            "target: outside the joint limits"
+        );
+    }
+
+    /// REQ-SM-006: a stop from any state latches the pose only when it is
+    /// finite, and the only way out, a reset, leads to Grasp with no pose.
+    #[cfg_attr(kani, kani::proof)]
+    pub fn verify_req_sm_006_stop_holds_only_a_finite_pose() {
+        let at = if kani::any() {
+            Some(Pose::new(kani::any(), kani::any(), kani::any()))
+        } else {
+            None
+        };
+        let stop = Grasp::new().stop(StopReason::Operator, at);
+        match (stop.hold(), at) {
+            (Some(hold), Some(pose)) => {
+                assert!(pose.is_finite() && hold == SetPoint::hold(pose));
+                kani::cover!(true, "stop: holds the pose");
+            }
+            (None, Some(pose)) => assert!(!pose.is_finite()),
+            (Some(_), None) => panic!("a stop without a pose holds one"),
+            (None, None) => {}
+        }
+        assert_eq!(stop.reason(), StopReason::Operator);
+        assert_eq!(stop.reset(), Grasp::new());
+    }
+
+    #[cfg(test)]
+    mod tests {
+        use super::*;
+
+        #[test]
+        fn harnesses_under_the_stand_in() {
+            kani::check("targets", 5_000, verify_req_sm_003_targets_are_checked);
+            kani::check(
+                "stop latch",
+                5_000,
+                verify_req_sm_006_stop_holds_only_a_finite_pose,
+            );
+        }
+    }
+}

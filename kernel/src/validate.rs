@@ -226,3 +226,174 @@ pub fn validate(
         estimate: *e,
     })
 }
+
+/// Proof of REQ-VAL-001.
+#[cfg(any(test, kani))]
+mod verification {
+    use super::*;
+    use crate::estimation::{FitEvidence, Method};
+    #[cfg(not(kani))]
+    use limb_kani_stand_in as kani;
+
+    /// REQ-VAL-001: an accepted model is finite, within every range of
+    /// `limits` and consistent with the start pose; a rejection names a
+    /// check that indeed fails, with the offending value.
+    pub fn check_verdict(
+        e: &ArmEstimate,
+        grasp_start: Point,
+        limits: &ValidationLimits,
+        verdict: &Result<ValidatedArm, Rejection>,
+    ) -> Result<(), &'static str> {
+        let v = &e.evidence;
+        let ensure = |ok: bool, failure| if ok { Ok(()) } else { Err(failure) };
+        match verdict {
+            Ok(arm) => {
+                ensure(
+                    arm.estimate() == e,
+                    "the accepted model is not the estimate",
+                )?;
+                ensure(
+                    e.elbow.is_finite() && e.shoulder.is_finite() && grasp_start.is_finite(),
+                    "accepted a non-finite point",
+                )?;
+                ensure(
+                    !outside(
+                        e.upper_arm_length,
+                        limits.min_upper_arm_length,
+                        limits.max_upper_arm_length,
+                    ) && !outside(
+                        e.forearm_length,
+                        limits.min_forearm_length,
+                        limits.max_forearm_length,
+                    ),
+                    "accepted a length out of range",
+                )?;
+                ensure(
+                    v.forearm_arc >= limits.min_arc && v.upper_arm_arc >= limits.min_arc,
+                    "accepted too short an arc",
+                )?;
+                ensure(
+                    v.forearm_residual <= limits.max_residual
+                        && v.upper_arm_residual <= limits.max_residual,
+                    "accepted too large a residual",
+                )?;
+                ensure(
+                    match v.method_disagreement {
+                        Some(d) => d <= limits.max_method_disagreement,
+                        None => !limits.require_method_agreement,
+                    },
+                    "accepted disagreeing or missing methods",
+                )?;
+                ensure(
+                    libm::fabs(e.elbow.z) <= limits.max_geometry_mismatch,
+                    "accepted an elbow off the table",
+                )
+            }
+            Err(Rejection::UpperArmLengthOutOfRange(l)) => ensure(
+                *l == e.upper_arm_length
+                    && outside(*l, limits.min_upper_arm_length, limits.max_upper_arm_length),
+                "l1 rejection misnamed",
+            ),
+            Err(Rejection::ForearmLengthOutOfRange(l)) => ensure(
+                *l == e.forearm_length
+                    && outside(*l, limits.min_forearm_length, limits.max_forearm_length),
+                "l2 rejection misnamed",
+            ),
+            Err(Rejection::ForearmArcTooShort(a)) => ensure(
+                *a == v.forearm_arc && *a < limits.min_arc,
+                "arc rejection misnamed",
+            ),
+            Err(Rejection::UpperArmArcTooShort(a)) => ensure(
+                *a == v.upper_arm_arc && *a < limits.min_arc,
+                "arc rejection misnamed",
+            ),
+            Err(Rejection::ForearmResidualTooLarge(r)) => ensure(
+                *r == v.forearm_residual && *r > limits.max_residual,
+                "residual rejection misnamed",
+            ),
+            Err(Rejection::UpperArmResidualTooLarge(r)) => ensure(
+                *r == v.upper_arm_residual && *r > limits.max_residual,
+                "residual rejection misnamed",
+            ),
+            Err(Rejection::MethodsDisagree(d)) => ensure(
+                v.method_disagreement == Some(*d) && *d > limits.max_method_disagreement,
+                "disagreement rejection misnamed",
+            ),
+            Err(Rejection::NoIndependentMethod) => ensure(
+                v.method_disagreement.is_none() && limits.require_method_agreement,
+                "missing-method rejection misnamed",
+            ),
+            Err(Rejection::GeometryInconsistent(m)) => ensure(
+                *m > limits.max_geometry_mismatch,
+                "geometry rejection within the tolerance",
+            ),
+            Err(Rejection::NonFinite) => Ok(()),
+        }
+    }
+
+    /// Any value, or (so that acceptance is reached under the sampling
+    /// stand-in too) the fixed arm's value.
+    fn any_or(value: f64) -> f64 {
+        if kani::any::<u8>() < 32 {
+            kani::any()
+        } else {
+            value
+        }
+    }
+
+    /// REQ-VAL-001: for any estimate and start point the validator accepts
+    /// only within its ranges and names the check a rejection failed.
+    #[cfg_attr(kani, kani::proof)]
+    #[cfg_attr(kani, kani::unwind(16))]
+    #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
+    pub fn verify_req_val_001_validator_never_accepts_outside_ranges() {
+        // Unwind 16: the finiteness check runs over 15 values.
+        let estimate = ArmEstimate {
+            upper_arm_length: any_or(0.30),
+            forearm_length: any_or(0.20),
+            elbow: Point::new(any_or(0.20), any_or(0.0)),
+            shoulder: Point::new(any_or(0.50), any_or(0.0)),
+            method: Method::Auto,
+            evidence: FitEvidence {
+                forearm_arc: any_or(1.3),
+                upper_arm_arc: any_or(1.3),
+                forearm_residual: any_or(1e-4),
+                upper_arm_residual: any_or(1e-4),
+                method_disagreement: if kani::any::<u8>() < 16 {
+                    None
+                } else {
+                    Some(any_or(1e-4))
+                },
+                forearm_samples: 1000,
+                upper_arm_samples: 1000,
+            },
+        };
+        let start = Point::new(any_or(0.0), any_or(0.0));
+        let limits = ValidationLimits::default();
+        let verdict = validate(&estimate, start, &limits);
+        assert_eq!(check_verdict(&estimate, start, &limits, &verdict), Ok(()));
+        kani::cover!(verdict.is_ok(), "validator: accepts");
+        kani::cover!(
+            matches!(verdict, Err(Rejection::GeometryInconsistent(_))),
+            "validator: geometry rejected"
+        );
+        kani::cover!(
+            matches!(verdict, Err(Rejection::NonFinite)),
+            "validator: non-finite rejected"
+        );
+    }
+
+    #[cfg(test)]
+    mod tests {
+        use super::*;
+
+        #[test]
+        fn harnesses_under_the_stand_in() {
+            kani::check(
+                "validator",
+                20_000,
+                verify_req_val_001_validator_never_accepts_outside_ranges,
+            );
+        }
+    }
+}

@@ -5,9 +5,8 @@
 
 use limb_kernel::arm::ArmGeometry;
 use limb_kernel::geometry::Pose;
-use limb_kernel::motion::SetPoint;
 use limb_kernel::trace::{Cause, Event};
-use limb_kernel::{Command, CommandMode, Kernel, KernelConfig, PathSample, StateKind};
+use limb_kernel::{Command, Kernel, KernelConfig, PathSample, StateKind};
 
 /// A failed check: which property, in words an auditor can match to `spec/`.
 pub type CheckResult = Result<(), &'static str>;
@@ -20,47 +19,10 @@ fn ensure(condition: bool, failure: &'static str) -> CheckResult {
     }
 }
 
-/// Relative slack for comparisons against saturation limits (rounding of
-/// the scaling by limit / magnitude).
-const ROUNDING: f64 = 1e-12;
-
-/// Every command: finite; force and torque within their limits; zero
-/// set-point velocity and acceleration unless tracking; the stop mode
-/// exactly in SafeStop, with zero wrench.
+/// Every command: the kernel's own statement of the command invariants
+/// ([`Command::check`]), which the Kani harnesses assert too.
 pub fn check_command(command: &Command, config: &KernelConfig) -> CheckResult {
-    let limits = &config.limits;
-    ensure(command.is_finite(), "command is not finite")?;
-    ensure(
-        command.wrench.force_magnitude() <= limits.max_force * (1.0 + ROUNDING),
-        "commanded force exceeds the force limit",
-    )?;
-    ensure(
-        command.wrench.ty.abs() <= limits.max_torque * (1.0 + ROUNDING),
-        "commanded torque exceeds the torque limit",
-    )?;
-    let still = |s: &SetPoint| {
-        s.velocity.linear_speed() == 0.0
-            && s.velocity.psi == 0.0
-            && s.acceleration.linear_speed() == 0.0
-            && s.acceleration.psi == 0.0
-    };
-    if command.mode != CommandMode::Track {
-        ensure(
-            command.set_point.as_ref().is_none_or(still),
-            "a hold or stop command moves the set-point",
-        )?;
-    }
-    ensure(
-        (command.mode == CommandMode::Stop) == (command.state == StateKind::SafeStop),
-        "stop mode and SafeStop disagree",
-    )?;
-    if command.mode == CommandMode::Stop {
-        ensure(
-            command.wrench.force_magnitude() == 0.0 && command.wrench.ty == 0.0,
-            "a stop command applies a wrench",
-        )?;
-    }
-    Ok(())
+    command.check(&config.limits)
 }
 
 /// True when `frame` at `now` crosses a limit that needs no history: a

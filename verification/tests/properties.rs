@@ -282,6 +282,10 @@ impl Session {
     }
 }
 
+/// REQ-SM-005, REQ-SM-006, REQ-MON-001, REQ-MON-004, REQ-MON-005,
+/// REQ-MON-007, REQ-CMD-003: arbitrary sessions (frames, clocks and
+/// requests, NaN and infinities included) keep every per-step and session
+/// check of `limb_verification::checks`.
 #[test]
 fn arbitrary_sessions_keep_every_safety_property() {
     let visited = RefCell::new(BTreeSet::new());
@@ -318,8 +322,9 @@ fn arbitrary_sessions_keep_every_safety_property() {
 }
 
 proptest! {
-    /// Any single frame, any clock: `step` returns a finite command within
-    /// the limits, from every state a session can be in after a lift.
+    /// REQ-PANIC-001, REQ-CMD-001: any single frame, any clock: `step`
+    /// returns a finite command within the limits, from every state a
+    /// session can be in after a lift.
     #[test]
     fn step_is_total_for_any_frame(lift in any::<bool>(), ops in prop::collection::vec(op(), 1..8)) {
         let mut session = Session::new(arm(0.30, 0.20));

@@ -1,9 +1,15 @@
 //! Traceability between `spec/requirements.toml`, `spec/hazards.md` and the
 //! checks in the repository. Fails when:
 //! * a requirement names no check, or a check that does not exist;
-//! * a named test or harness does not mention its requirement's ID;
-//! * a `req_*` test or `proof_*` harness is named by no requirement, or
-//!   mentions an ID that does not exist;
+//! * a cited check (of any engine) does not mention the citing
+//!   requirement's ID in its doc comment;
+//! * a `kani:` entry is not a Kani harness (`kani::proof`) named
+//!   `verify_req_…`, a `proptest:` entry is not in a file with properties;
+//! * a `req_*` test or `verify_req_*` harness (tests and the kernel's
+//!   sources) is named by no requirement, or mentions an ID that does not
+//!   exist;
+//! * the record of harnesses real Kani has verified names a harness that is
+//!   not cited;
 //! * a requirement cites an unknown hazard, or a hazard has no requirement;
 //! * `spec/traceability.md` is not the table this test generates (run with
 //!   `LIMB_BLESS=1` to rewrite it).
@@ -14,7 +20,15 @@ use std::path::{Path, PathBuf};
 
 #[derive(Deserialize)]
 struct Spec {
+    kani: KaniRecord,
     requirement: Vec<Requirement>,
+}
+
+/// What real Kani has said about the harnesses.
+#[derive(Deserialize)]
+struct KaniRecord {
+    version: String,
+    verified: Vec<String>,
 }
 
 #[derive(Deserialize)]
@@ -59,20 +73,26 @@ fn check_entry(id: &str, entry: &str) -> Result<(), String> {
         .split_once(':')
         .ok_or(format!("{id}: malformed entry {entry}"))?;
     match kind {
-        "test" | "proof" => {
+        "test" | "proptest" | "kani" => {
             let (file, name) = rest
                 .split_once("::")
                 .ok_or(format!("{id}: malformed entry {entry}"))?;
             let text = read(file)?;
             let doc = doc_above(&text, name).ok_or(format!("{id}: {file} has no fn {name}"))?;
-            let named = name.starts_with("req_") || name.starts_with("proof_");
-            if named && !doc.contains(id) {
+            if !doc.contains(id) {
                 return Err(format!(
                     "{id}: {file}::{name} does not name {id} in its doc comment"
                 ));
             }
-            if kind == "proof" && !text.contains(&format!("fn {name}()")) {
-                return Err(format!("{id}: {name} is not a harness"));
+            if kind == "kani"
+                && !(name.starts_with("verify_req_")
+                    && doc.contains("kani::proof")
+                    && text.contains(&format!("fn {name}()")))
+            {
+                return Err(format!("{id}: {name} is not a verify_req_ Kani harness"));
+            }
+            if kind == "proptest" && !text.contains("proptest!") {
+                return Err(format!("{id}: {file} has no proptest properties"));
             }
             Ok(())
         }
@@ -93,23 +113,28 @@ fn check_entry(id: &str, entry: &str) -> Result<(), String> {
     }
 }
 
-/// Every `req_*` test and `proof_*` harness in the repository's test and
-/// proof files, with the file it is in.
-fn checks_in_repository() -> Vec<(String, String)> {
-    let mut files = vec!["verification/src/proofs.rs".to_string()];
-    for dir in ["verification/tests", "kernel/tests"] {
-        let mut entries: Vec<_> = std::fs::read_dir(root().join(dir))
-            .map(|d| d.filter_map(Result::ok).map(|e| e.path()).collect())
-            .unwrap_or_default();
-        entries.sort();
-        for path in entries {
-            if path.extension().is_some_and(|e| e == "rs") {
-                files.push(format!(
-                    "{dir}/{}",
-                    path.file_name().unwrap().to_string_lossy()
-                ));
-            }
+/// The `.rs` files under `dir` (relative to the root), recursively, sorted.
+fn rust_files(dir: &str, out: &mut Vec<String>) {
+    let mut entries: Vec<_> = std::fs::read_dir(root().join(dir))
+        .map(|d| d.filter_map(Result::ok).map(|e| e.path()).collect())
+        .unwrap_or_default();
+    entries.sort();
+    for path in entries {
+        let name = path.file_name().unwrap().to_string_lossy().into_owned();
+        if path.is_dir() {
+            rust_files(&format!("{dir}/{name}"), out);
+        } else if name.ends_with(".rs") {
+            out.push(format!("{dir}/{name}"));
         }
+    }
+}
+
+/// Every `req_*` test and `verify_req_*` harness in the repository's test
+/// files and the kernel's sources, with the file it is in.
+fn checks_in_repository() -> Vec<(String, String)> {
+    let mut files = Vec::new();
+    for dir in ["verification/tests", "kernel/tests", "kernel/src"] {
+        rust_files(dir, &mut files);
     }
     let mut found = Vec::new();
     for file in files {
@@ -121,7 +146,7 @@ fn checks_in_repository() -> Vec<(String, String)> {
                     .chars()
                     .take_while(|c| c.is_alphanumeric() || *c == '_')
                     .collect();
-                if name.starts_with("req_") || name.starts_with("proof_") {
+                if name.starts_with("req_") || name.starts_with("verify_req_") {
                     found.push((file.clone(), name));
                 }
             }
@@ -130,20 +155,43 @@ fn checks_in_repository() -> Vec<(String, String)> {
     found
 }
 
+/// Which engines check a requirement: `kani` (harnesses written for real
+/// Kani, sampled by the stand-in under `cargo test`), `proptest`, or both.
+fn engines(r: &Requirement) -> &'static str {
+    let has = |kind: &str| r.verified_by.iter().any(|v| v.starts_with(kind));
+    match (has("kani:"), has("proptest:")) {
+        (true, true) => "both",
+        (true, false) => "kani",
+        (false, true) => "proptest",
+        (false, false) => "tests",
+    }
+}
+
 fn table(spec: &Spec) -> String {
-    let mut out = String::from(
+    let mut out = format!(
         "# Traceability\n\nGenerated by `verification/tests/traceability.rs` from \
          `requirements.toml` (run `LIMB_BLESS=1 cargo test -p limb-verification --test traceability` \
-         to regenerate). Every requirement, the hazards it mitigates, and the checks that verify it.\n\n\
-         | requirement | title | hazards | verified by |\n|---|---|---|---|\n",
+         to regenerate). Every requirement, the hazards it mitigates, the engines that check it \
+         and the checks. Engines: `kani` = a Kani harness beside the code (proved by `cargo kani` \
+         under stated libm stubs; under `cargo test` only sampled by the stand-in), `proptest` = \
+         a property over generated inputs, `tests` = fixed cases and sessions only.\n\n\
+         Real Kani ({}): {}.\n\n\
+         | requirement | title | hazards | engines | verified by |\n|---|---|---|---|---|\n",
+        spec.kani.version,
+        if spec.kani.verified.is_empty() {
+            "no harness of this table has been reported verified yet".to_string()
+        } else {
+            format!("verified {}", spec.kani.verified.join(", "))
+        }
     );
     for r in &spec.requirement {
         let checks: Vec<String> = r.verified_by.iter().map(|v| format!("`{v}`")).collect();
         out.push_str(&format!(
-            "| {} | {} | {} | {} |\n",
+            "| {} | {} | {} | {} | {} |\n",
             r.id,
             r.title,
             r.hazards.join(", "),
+            engines(r),
             checks.join("<br>")
         ));
     }
@@ -209,6 +257,11 @@ fn every_requirement_is_verified_and_every_check_traces_to_one() {
         }
         if cited_by.is_empty() {
             failures.push(format!("{file}::{name}: no requirement"));
+        }
+    }
+    for harness in &spec.kani.verified {
+        if !referenced.keys().any(|(_, name)| name == harness) {
+            failures.push(format!("kani.verified: {harness} is not a cited harness"));
         }
     }
     let generated = table(&spec);

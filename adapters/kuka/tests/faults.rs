@@ -94,6 +94,7 @@ fn random_loss_is_ridden_through_with_gaps_counted() {
     assert!(run.sim.stats().missed_cycles >= dropped);
 }
 
+/// REQ-ADP-001.
 #[test]
 fn loss_burst_trips_the_watchdog_then_reenters_without_jump() {
     let run = run(FriVersion::V2_5, "burst-loss@600:50", 1200);
@@ -137,6 +138,7 @@ fn counter_jump_is_a_gap_and_handled() {
     assert_rides_through(&run);
 }
 
+/// REQ-ADP-001.
 #[test]
 fn poor_quality_aborts_the_overlay_and_stops_the_kernel() {
     let run = run(FriVersion::V1_15, "poor-quality@600:30", 1000);
@@ -144,6 +146,7 @@ fn poor_quality_aborts_the_overlay_and_stops_the_kernel() {
     assert_eq!(run.sim.stats().overlay_aborts, 1);
 }
 
+/// REQ-ADP-001.
 #[test]
 fn drop_to_idle_is_silent_then_reenters_without_jump() {
     let run = run(FriVersion::V2_7, "idle@600:50", 1000);
@@ -170,7 +173,7 @@ fn wrong_crc_is_rejected_as_a_lost_datagram() {
     assert_rides_through(&run);
 }
 
-/// Wrench overlay: a loss burst trips the watchdog the same way; the
+/// REQ-ADP-001, wrench overlay: a loss burst trips the watchdog the same way; the
 /// overlay re-enters (wrench mode has no joint target to jump: the first
 /// replies carry the IPO/measured position and a zero wrench).
 #[test]

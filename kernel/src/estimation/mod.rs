@@ -401,3 +401,6 @@ fn fit_robust(path: &[PathSample]) -> Result<(Phases, PhaseFits), EstimateError>
         },
     ))
 }
+
+#[cfg(any(test, kani))]
+mod verification;

@@ -177,3 +177,110 @@ mod tests {
         assert!(at_most(Limit::Speed, f64::NAN, 0.15).is_err());
     }
 }
+
+/// Proofs of the comparison every monitor verdict goes through.
+#[cfg(any(test, kani))]
+mod verification {
+    use super::*;
+    use crate::config::Interval;
+    #[cfg(not(kani))]
+    use limb_kani_stand_in as kani;
+
+    /// REQ-MON-007: [`at_most`] passes exactly the values at or below the
+    /// bound (NaN violates) and a violation records the value and bound.
+    pub fn check_at_most(value: f64, bound: f64, verdict: Verdict) -> Result<(), &'static str> {
+        match verdict {
+            Ok(()) if value <= bound => Ok(()),
+            Ok(()) => Err("at_most passed a value beyond the bound or NaN"),
+            Err(_) if value <= bound => Err("at_most tripped within the bound"),
+            Err(v)
+                if v.limit == Limit::Speed
+                    && v.bound.to_bits() == bound.to_bits()
+                    && v.value.to_bits() == value.to_bits() =>
+            {
+                Ok(())
+            }
+            Err(_) => Err("at_most's violation misreports the limit, value or bound"),
+        }
+    }
+
+    /// REQ-MON-005: [`within`] passes exactly the values of the closed
+    /// interval (NaN violates) and names the crossed bound.
+    pub fn check_within(value: f64, range: Interval, verdict: Verdict) -> Result<(), &'static str> {
+        let inside = range.low <= value && value <= range.high;
+        let below = value < range.low;
+        match verdict {
+            Ok(()) if inside => Ok(()),
+            Ok(()) => Err("within passed a value outside the range or NaN"),
+            Err(_) if inside => Err("within tripped inside the range"),
+            Err(v) if v.value.to_bits() != value.to_bits() => Err("within misreports the value"),
+            Err(v) if below && v.bound.to_bits() != range.low.to_bits() => {
+                Err("within names the high bound for a value below the range")
+            }
+            Err(v) if !below && v.bound.to_bits() != range.high.to_bits() => {
+                Err("within names the low bound for a value not below the range")
+            }
+            Err(_) => Ok(()),
+        }
+    }
+
+    /// REQ-MON-007: the upper-bound comparison of every monitor, for any
+    /// value and bound (NaN and infinities included).
+    #[cfg_attr(kani, kani::proof)]
+    pub fn verify_req_mon_007_at_most_is_a_closed_upper_bound() {
+        let (value, bound): (f64, f64) = (kani::any(), kani::any());
+        let verdict = at_most(Limit::Speed, value, bound);
+        assert_eq!(check_at_most(value, bound, verdict), Ok(()));
+        kani::cover!(verdict.is_ok(), "at_most: passes");
+        kani::cover!(
+            verdict.is_err() && !value.is_nan(),
+            "at_most: trips on a number"
+        );
+        kani::cover!(value.is_nan(), "at_most: NaN");
+    }
+
+    /// REQ-MON-005: the range comparison of the joint-limit and workspace
+    /// monitors, for any value and any range.
+    #[cfg_attr(kani, kani::proof)]
+    pub fn verify_req_mon_005_within_is_the_closed_interval() {
+        let value: f64 = kani::any();
+        let range = Interval::new(kani::any(), kani::any());
+        let verdict = within(Limit::ElbowFlexion, value, range);
+        assert_eq!(check_within(value, range, verdict), Ok(()));
+        kani::cover!(verdict.is_ok(), "within: passes");
+        kani::cover!(value < range.low, "within: below");
+        kani::cover!(value > range.high, "within: above");
+    }
+
+    #[cfg(test)]
+    mod tests {
+        use super::*;
+        use proptest::prelude::*;
+
+        #[test]
+        fn harnesses_under_the_stand_in() {
+            kani::check(
+                "at_most",
+                20_000,
+                verify_req_mon_007_at_most_is_a_closed_upper_bound,
+            );
+            kani::check(
+                "within",
+                20_000,
+                verify_req_mon_005_within_is_the_closed_interval,
+            );
+        }
+
+        proptest! {
+            /// REQ-MON-005, REQ-MON-007: the comparisons meet the proofs'
+            /// checks on sampled values and ranges.
+            #[test]
+            fn comparisons_meet_their_checks(value in -10.0..10.0f64, low in -10.0..10.0f64,
+                                             width in 0.0..10.0f64) {
+                let range = Interval::new(low, low + width);
+                prop_assert_eq!(check_within(value, range, within(Limit::ElbowFlexion, value, range)), Ok(()));
+                prop_assert_eq!(check_at_most(value, low, at_most(Limit::Speed, value, low)), Ok(()));
+            }
+        }
+    }
+}

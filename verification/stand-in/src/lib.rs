@@ -1,13 +1,17 @@
-//! A small stand-in for the `kani` API, so the proof harnesses of
-//! [`crate::proofs`] type-check and run under `cargo test` where the Kani
-//! verifier is not installed. Under `cargo kani` the real `kani` crate
-//! replaces this module and the same harnesses are proved, not sampled.
+//! A small stand-in for the `kani` API, so the proof harnesses beside the
+//! kernel's modules (`#[cfg(any(test, kani))] mod verification`) type-check
+//! and run under `cargo test` where the Kani verifier is not installed.
+//! A harness module imports it as `kani` when `cfg(kani)` is off; under
+//! `cargo kani` the real `kani` crate is used and the same harnesses are
+//! proved, not sampled. Kani's stubs (`#[kani::stub]`) are not applied
+//! here: the stand-in runs the real functions, whose agreement with each
+//! stub's contract is a proptest property (`kernel/src/kani_stubs.rs`).
 //!
 //! * [`any`] draws a value from a seeded generator that favours edge cases
 //!   (zero, ±0, NaN, ±∞, tiny and huge magnitudes, small integers).
 //! * [`assume`] rejects the current draw: it unwinds with a marker that
 //!   [`run`] catches and counts, like Kani discarding the path.
-//! * [`cover!`](crate::cover) records that a condition was reached; [`run`]
+//! * [`cover!`] records that a condition was reached; [`run`]
 //!   fails a harness whose covers were never hit, as Kani reports an
 //!   unsatisfiable cover.
 //!
@@ -19,8 +23,6 @@ use std::cell::{Cell, RefCell};
 use std::collections::BTreeMap;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::Once;
-
-pub use crate::cover;
 
 thread_local! {
     static STATE: Cell<u64> = const { Cell::new(0x9E37_79B9_7F4A_7C15) };
@@ -106,7 +108,7 @@ pub fn assume(condition: bool) {
     }
 }
 
-/// Records that `name`'s condition was reached (see [`crate::cover`]).
+/// Records that `name`'s condition was reached (see [`cover!`]).
 pub fn record_cover(name: &'static str, hit: bool) {
     COVERS.with(|c| *c.borrow_mut().entry(name).or_insert(0) += u64::from(hit));
 }
@@ -115,7 +117,7 @@ pub fn record_cover(name: &'static str, hit: bool) {
 #[macro_export]
 macro_rules! cover {
     ($condition:expr, $message:literal) => {
-        $crate::kani_stand_in::record_cover($message, $condition)
+        $crate::record_cover($message, $condition)
     };
 }
 
@@ -170,4 +172,21 @@ pub fn run(seed: u64, draws: u64, harness: fn()) -> Run {
         rejected,
         unreached,
     }
+}
+
+/// Runs `harness` `draws` times from a seed derived from `draws` and
+/// panics, naming `name`, unless most draws were accepted and every
+/// `cover!` was reached (Kani's "unsatisfiable cover" is a failure here).
+pub fn check(name: &str, draws: u64, harness: fn()) -> Run {
+    let outcome = run(0x5EED ^ draws, draws, harness);
+    assert!(
+        outcome.accepted * 2 > draws,
+        "{name}: too many draws rejected: {outcome:?}"
+    );
+    assert!(
+        outcome.unreached.is_empty(),
+        "{name}: covers never reached: {:?}",
+        outcome.unreached
+    );
+    outcome
 }

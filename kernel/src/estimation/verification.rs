@@ -1,0 +1,233 @@
+//! Proof of REQ-EST-001 for the estimator's index arithmetic and buffer
+//! bounds (phase detection, look-ahead window, phase ranges, point
+//! streaming), written against the public [`estimate_arm`] with
+//! [`Method::Ls`].
+//!
+//! # What is stubbed, and why that is sound
+//! Besides the libm stubs (`crate::kani_stubs`), the proof replaces the two
+//! circle fits by any result their contracts allow: the robust circle of
+//! phase detection ([`PointModel::robust_circle`], Hough + geometric
+//! refinement, whose 501-cell accumulator and iterations are far beyond
+//! CBMC with symbolic points) and the Kåsa fit ([`fit_circle_kasa`], a 3×3
+//! solve). Contracts: a fit of fewer than 3 points is an error; otherwise
+//! an error or a valid circle (finite centre, finite radius > 0) with, for
+//! the robust fit, a finite non-negative noise level. The proptest
+//! `fits_meet_their_stub_contracts` checks both contracts against the real
+//! fits. With the fits free, every residual the phase scan computes is any
+//! number, so the proof covers every pattern of departures the real fits
+//! could produce on paths up to [`N`] samples: the index arithmetic, the
+//! look-ahead count and the ranges handed to the fits are checked for all
+//! of them.
+//!
+//! # Path length
+//! [`N`] = 24: the shortest path whose two phases can both reach
+//! [`MIN_PHASE_SAMPLES`] (10 each) with lift-off and a departure window of
+//! at least 10 samples, so the `Ok` branch is reachable; every loop of
+//! the estimator runs over the path (at most N), over a look-ahead window
+//! (at most N here) or over the 3 rounds, hence unwind N + 1.
+
+use super::*;
+use crate::arm::{ArmGeometry, JointAngles};
+use crate::geometry::{Pose, Wrench};
+#[cfg(not(kani))]
+use limb_kani_stand_in as kani;
+
+/// Longest path the proof considers [samples].
+pub const N: usize = 24;
+
+/// The contract of a circle fit's result over `count` points.
+pub fn circle_fit_contract(count: usize, fit: &Result<Circle, CircleFitError>) -> bool {
+    match fit {
+        Ok(circle) => count >= 3 && circle.is_valid(),
+        Err(_) => true,
+    }
+}
+
+/// The contract of the robust fit's result over `count` points.
+pub fn robust_fit_contract(count: usize, fit: &Result<GeometricFit, CircleFitError>) -> bool {
+    match fit {
+        Ok(fit) => {
+            circle_fit_contract(count, &Ok(fit.circle)) && fit.noise.is_finite() && fit.noise >= 0.0
+        }
+        Err(_) => true,
+    }
+}
+
+/// Kani stubs of the fits: any result the contract allows.
+#[cfg(kani)]
+mod stub {
+    use super::*;
+
+    fn any_circle() -> Circle {
+        Circle {
+            centre: Point::new(kani::any(), kani::any()),
+            radius: kani::any(),
+        }
+    }
+
+    /// Stub of [`fit_circle_kasa`].
+    pub fn fit_circle_kasa<I: Iterator<Item = Point> + Clone>(
+        points: I,
+    ) -> Result<Circle, CircleFitError> {
+        let count = points.count();
+        let fit = if kani::any() {
+            Ok(any_circle())
+        } else {
+            Err(CircleFitError::Degenerate)
+        };
+        kani::assume(circle_fit_contract(count, &fit));
+        fit
+    }
+
+    /// Stub of [`PointModel::robust_circle`].
+    pub fn robust_circle(
+        _model: &PointModel,
+        path: &[PathSample],
+        range: Range<usize>,
+    ) -> Result<GeometricFit, CircleFitError> {
+        let count = path.get(range).map_or(0, <[PathSample]>::len);
+        let fit = if kani::any() {
+            Ok(GeometricFit {
+                circle: any_circle(),
+                noise: kani::any(),
+            })
+        } else {
+            Err(CircleFitError::Degenerate)
+        };
+        kani::assume(robust_fit_contract(count, &fit));
+        fit
+    }
+}
+
+/// A noise-free estimation path of `n` samples at 100 Hz for l1 0.30 m,
+/// l2 0.20 m: the first 14 turn the forearm about the resting elbow (psi
+/// 0.06 to 0.5 rad), the rest lift the upper arm (q1 up by 0.06 rad a
+/// sample).
+pub fn short_lift(n: usize) -> [PathSample; N] {
+    let arm = ArmGeometry::new(0.30, 0.20, Point::new(0.50, 0.0)).expect("a valid arm");
+    let mut path = [PathSample::default(); N];
+    for (i, sample) in path.iter_mut().enumerate().take(n) {
+        let k = i as f64;
+        let q = if i < 14 {
+            JointAngles {
+                shoulder_elevation: 0.0,
+                elbow_flexion: 0.06 + k * (0.44 / 13.0),
+            }
+        } else {
+            JointAngles {
+                shoulder_elevation: (k - 13.0) * 0.06,
+                elbow_flexion: 0.5,
+            }
+        };
+        *sample = PathSample {
+            time: k * 0.01,
+            pose: arm.forward(q),
+            wrench: Wrench::ZERO,
+        };
+    }
+    path
+}
+
+/// REQ-EST-001: for any path of up to [`N`] samples — its length, every
+/// forearm elevation and one arbitrary sample (NaN, infinities) anywhere —
+/// the estimator returns a typed error or an estimate whose phases lie in
+/// the path and hold at least [`MIN_PHASE_SAMPLES`] each, with finite
+/// positive lengths; it never panics (indices, windows, subtraction).
+#[cfg_attr(kani, kani::proof)]
+#[cfg_attr(kani, kani::unwind(25))]
+#[cfg_attr(kani, kani::stub(fit_circle_kasa, stub::fit_circle_kasa))]
+#[cfg_attr(kani, kani::stub(PointModel::robust_circle, stub::robust_circle))]
+#[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
+#[cfg_attr(kani, kani::stub(libm::sqrt, crate::kani_stubs::stub::sqrt))]
+#[cfg_attr(kani, kani::stub(libm::atan2, crate::kani_stubs::stub::atan2))]
+#[cfg_attr(kani, kani::stub(libm::sin, crate::kani_stubs::stub::sin))]
+#[cfg_attr(kani, kani::stub(libm::cos, crate::kani_stubs::stub::cos))]
+pub fn verify_req_est_001_estimator_is_total() {
+    let length = usize::from(kani::any::<u8>()) % (N + 1);
+    let mut path = short_lift(N);
+    if kani::any() {
+        // Any forearm elevations: lift-off, the first guess of phase 1
+        // and the phase split anywhere.
+        for sample in path.iter_mut() {
+            sample.pose.psi = kani::any();
+        }
+    }
+    if kani::any() {
+        let at = usize::from(kani::any::<u8>()) % N;
+        path[at] = crate::kani_inputs::any_frame();
+    }
+    let path = &path[..length];
+    let result = estimate_arm(path, Method::Ls);
+    if let Ok(estimate) = result {
+        let e = estimate.evidence;
+        assert!(e.forearm_samples >= MIN_PHASE_SAMPLES && e.upper_arm_samples >= MIN_PHASE_SAMPLES);
+        assert!(e.forearm_samples + e.upper_arm_samples <= path.len());
+        assert!(estimate.upper_arm_length.is_finite() && estimate.upper_arm_length > 0.0);
+        assert!(estimate.forearm_length.is_finite() && estimate.forearm_length > 0.0);
+    }
+    kani::cover!(result.is_ok(), "estimator: estimate");
+    kani::cover!(
+        result == Err(EstimateError::ForearmPhaseTooShort),
+        "estimator: phase 1 too short"
+    );
+    kani::cover!(
+        result == Err(EstimateError::NonFiniteSample),
+        "estimator: non-finite sample"
+    );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    #[test]
+    fn harnesses_under_the_stand_in() {
+        kani::check("estimator", 3_000, verify_req_est_001_estimator_is_total);
+    }
+
+    #[test]
+    fn the_short_lift_is_estimated() {
+        let path = short_lift(N);
+        let estimate = estimate_arm(&path, Method::Ls).expect("the short lift is estimated");
+        assert!(
+            (estimate.forearm_length - 0.20).abs() < 1e-6,
+            "{estimate:?}"
+        );
+        assert!(
+            (estimate.upper_arm_length - 0.30).abs() < 1e-6,
+            "{estimate:?}"
+        );
+    }
+
+    proptest! {
+        /// REQ-EST-001: the real fits meet the contracts the proof assumes
+        /// of them, on arbitrary points (NaN, infinities, repeats) and on
+        /// noisy arcs.
+        #[test]
+        fn req_est_001_fits_meet_their_stub_contracts(
+            raw in prop::collection::vec((-1.0..1.0f64, -1.0..1.0f64, any::<u8>()), 0..30),
+            radius in 0.05..0.5f64, noise in 0.0..1e-3f64,
+        ) {
+            let points: [Point; 30] = core::array::from_fn(|i| match raw.get(i) {
+                Some(&(x, z, 0)) => Point::new(x * f64::NAN, z),
+                Some(&(x, _, 1)) => Point::new(x, f64::INFINITY),
+                Some(&(x, z, k)) if k < 128 => Point::new(x, z),
+                Some(&(x, _, _)) => {
+                    let angle = x * 1.5;
+                    Point::new(radius * libm::cos(angle) + noise * x, radius * libm::sin(angle))
+                }
+                None => Point::default(),
+            });
+            let count = raw.len();
+            let points = &points[..count];
+            prop_assert!(circle_fit_contract(count, &fit_circle_kasa(points.iter().copied())));
+            let path: [PathSample; 30] = core::array::from_fn(|i| PathSample {
+                pose: Pose::new(points.get(i).map_or(0.0, |p| p.x), points.get(i).map_or(0.0, |p| p.z), 0.0),
+                ..PathSample::default()
+            });
+            let fit = PointModel::GRASP.robust_circle(&path[..count], 0..count);
+            prop_assert!(robust_fit_contract(count, &fit), "{:?}", fit);
+        }
+    }
+}

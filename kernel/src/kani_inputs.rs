@@ -1,0 +1,119 @@
+//! Symbolic inputs and fixed starting points for the proof harnesses of
+//! the kernel's modules (`mod verification`).
+//!
+//! Under `cargo kani` every `kani::any()` is every value of its type; under
+//! `cargo test` the sampling stand-in draws them (edge values favoured).
+//! The fixed starting points are small and built directly: a
+//! [`ValidatedArm`] made by the real validator from a fixed estimate, not by
+//! running a session (a harness never runs the ~3 000-step lift).
+
+#[cfg(not(kani))]
+use limb_kani_stand_in as kani;
+
+use crate::arm::JointAngles;
+use crate::estimation::{ArmEstimate, FitEvidence, Method};
+use crate::geometry::{Point, Pose, PoseRate, Wrench};
+use crate::kernel::Request;
+use crate::path::PathSample;
+use crate::validate::{validate, ValidatedArm, ValidationLimits};
+
+/// Any pose.
+pub fn any_pose() -> Pose {
+    Pose::new(kani::any(), kani::any(), kani::any())
+}
+
+/// Any pose rate.
+pub fn any_pose_rate() -> PoseRate {
+    PoseRate::new(kani::any(), kani::any(), kani::any())
+}
+
+/// Any wrench.
+pub fn any_wrench() -> Wrench {
+    Wrench::new(kani::any(), kani::any(), kani::any())
+}
+
+/// Any sensor frame.
+pub fn any_frame() -> PathSample {
+    PathSample {
+        time: kani::any(),
+        pose: any_pose(),
+        wrench: any_wrench(),
+    }
+}
+
+/// Either any frame, or (so that the nominal branch is reached under the
+/// sampling stand-in too) a plausible one: `pose` measured at `time` with
+/// no interaction force. Kani explores both.
+pub fn any_frame_or_at(pose: Pose, time: f64) -> PathSample {
+    if kani::any() {
+        any_frame()
+    } else {
+        PathSample {
+            time,
+            pose,
+            wrench: Wrench::ZERO,
+        }
+    }
+}
+
+/// Any request, targets included.
+pub fn any_request() -> Request {
+    match kani::any::<u8>() % 6 {
+        0 => Request::StartEstimation,
+        1 => Request::ApproveManipulation(MANIPULATION_TARGET),
+        2 => Request::ApproveManipulation(JointAngles {
+            shoulder_elevation: kani::any(),
+            elbow_flexion: kani::any(),
+        }),
+        3 => Request::FinishManipulation,
+        4 => Request::Stop,
+        _ => Request::Reset,
+    }
+}
+
+/// Upper-arm length l1 of the fixed arm [m].
+pub const UPPER_ARM: f64 = 0.30;
+/// Forearm length l2 of the fixed arm [m].
+pub const FOREARM: f64 = 0.20;
+/// Shoulder of the fixed arm (frame S): extended on the table, the grasp
+/// at the origin [m].
+pub const SHOULDER: Point = Point::new(UPPER_ARM + FOREARM, 0.0);
+/// A hold pose of the fixed arm: upper arm vertical (q1 = π/2), elbow
+/// straight (q2 = 0), so the grasp is at (0.5, 0.5) m with psi = π/2.
+pub const HOLD: Pose = Pose::new(0.5, 0.5, core::f64::consts::FRAC_PI_2);
+/// A manipulation target inside the default joint limits and workspace
+/// for the fixed arm [rad].
+pub const MANIPULATION_TARGET: JointAngles = JointAngles {
+    shoulder_elevation: 1.0,
+    elbow_flexion: 0.6,
+};
+
+/// The fixed arm (l1 0.30 m, l2 0.20 m, shoulder at (0.5, 0) m), validated
+/// by the real validator from an estimate whose geometry is axis-aligned:
+/// the distances it checks are `hypot(d, 0)`, exact by the stub contract,
+/// so it is accepted under Kani's stubs as under the real libm.
+pub fn validated_arm() -> ValidatedArm {
+    let estimate = ArmEstimate {
+        upper_arm_length: UPPER_ARM,
+        forearm_length: FOREARM,
+        elbow: Point::new(FOREARM, 0.0),
+        shoulder: SHOULDER,
+        method: Method::Auto,
+        evidence: FitEvidence {
+            forearm_arc: 1.3,
+            upper_arm_arc: 1.3,
+            forearm_residual: 1e-4,
+            upper_arm_residual: 1e-4,
+            method_disagreement: Some(1e-4),
+            forearm_samples: 1000,
+            upper_arm_samples: 1000,
+        },
+    };
+    let accepted = validate(
+        &estimate,
+        Point::new(0.0, 0.0),
+        &ValidationLimits::default(),
+    );
+    kani::cover!(accepted.is_ok(), "the fixed estimate is validated");
+    accepted.expect("the fixed estimate is within every validation limit")
+}
