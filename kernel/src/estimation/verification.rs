@@ -28,7 +28,7 @@
 
 use super::*;
 use crate::arm::{ArmGeometry, JointAngles};
-use crate::geometry::{Pose, Wrench};
+use crate::geometry::Wrench;
 #[cfg(not(kani))]
 use limb_kani_stand_in as kani;
 
@@ -179,6 +179,7 @@ pub fn verify_req_est_001_estimator_is_total() {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::Pose;
     use proptest::prelude::*;
 
     #[test]
