@@ -16,8 +16,9 @@ fn limb(args: &[&str]) -> (i32, String, String) {
 }
 
 /// REQ-MON-008: all six benchmark arms: the session completes with no
-/// monitor event and a model within 0.2 mm of the truth (the README's
-/// figure).
+/// monitor event and a model within 0.2 mm of the truth, the README's
+/// figure (measured: at most 0.166 mm on l1, 0.006 mm on l2 and 0.196 mm on
+/// the shoulder, for l1 0.33 m, l2 0.20 m, default seed).
 #[test]
 fn every_benchmark_arm_completes_without_monitor_events() {
     for (l1, l2) in limb_sim::BENCHMARK_ARMS {
@@ -39,7 +40,7 @@ fn every_benchmark_arm_completes_without_monitor_events() {
         );
         for key in ["error_l1", "error_l2", "error_shoulder"] {
             let error = report["model"][key].as_f64().unwrap();
-            assert!(error.abs() < 1e-3, "arm {l1}/{l2}: {key} = {error}");
+            assert!(error.abs() < 0.2e-3, "arm {l1}/{l2}: {key} = {error}");
         }
     }
 }
