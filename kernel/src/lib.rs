@@ -32,7 +32,10 @@
 //! that call the same checking functions plus a run of every harness
 //! through the sampling stand-in (`limb-kani-stand-in`). `cargo kani` from
 //! the workspace root proves them; `kani_stubs` states the contracts of the
-//! libm functions the proofs replace.
+//! libm functions the proofs replace. Every harness that runs a loop says
+//! which loop its `kani::unwind` bound covers; a harness without one runs
+//! none. Harnesses start from states built directly (`kani_inputs`), never
+//! from a whole session.
 
 #![no_std]
 #![forbid(unsafe_code)]
