@@ -717,8 +717,10 @@ mod verification {
         assert_eq!(kernel.step(&any_frame(), kani::any()), first);
         let request = any_request();
         kani::assume(request != Request::Reset);
-        let _ = kernel.request(request, kani::any());
+        let answer = kernel.request(request, kani::any());
         assert_eq!(kernel.step(&any_frame(), kani::any()), first);
+        assert_eq!(kernel.state().kind(), StateKind::SafeStop);
+        kani::cover!(answer.is_err(), "latch: a request refused");
         kani::cover!(
             first.set_point == Some(SetPoint::hold(HOLD)),
             "latch: holds the pose"
@@ -891,6 +893,26 @@ mod verification {
                 5_000,
                 verify_req_sm_007_limits_change_only_while_held,
             );
+        }
+
+        /// A manipulation approved at a later time starts there: its first
+        /// set-point is the hold pose, its last the target's.
+        #[test]
+        fn manipulation_timing_starts_at_the_approval() {
+            let (mut kernel, _) = kernel_in(StateKind::Validated);
+            let approved_at = 5.0;
+            let request = Request::ApproveManipulation(MANIPULATION_TARGET);
+            assert_eq!(
+                kernel.request(request, approved_at),
+                Ok(StateKind::Manipulate)
+            );
+            let State::Manipulate(manipulate) = *kernel.state() else {
+                panic!("not manipulating")
+            };
+            assert_eq!(manipulate.set_point(approved_at).pose, HOLD);
+            let goal = manipulate.arm().geometry().forward(MANIPULATION_TARGET);
+            assert_eq!(manipulate.set_point(approved_at + 1e3).pose, goal);
+            assert_ne!(manipulate.set_point(approved_at + 0.5).pose, HOLD);
         }
 
         proptest! {

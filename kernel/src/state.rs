@@ -403,7 +403,10 @@ mod verification {
                 assert!(pose.is_finite() && hold == SetPoint::hold(pose));
                 kani::cover!(true, "stop: holds the pose");
             }
-            (None, Some(pose)) => assert!(!pose.is_finite()),
+            (None, Some(pose)) => {
+                assert!(!pose.is_finite());
+                kani::cover!(true, "stop: a non-finite pose is not held");
+            }
             (Some(_), None) => panic!("a stop without a pose holds one"),
             (None, None) => {}
         }

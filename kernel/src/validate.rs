@@ -387,6 +387,60 @@ mod verification {
     mod tests {
         use super::*;
 
+        /// REQ-VAL-001: every limit is inclusive: an estimate exactly at
+        /// each bound is accepted, one just past it is rejected by name.
+        #[test]
+        fn req_val_001_bounds_are_inclusive() {
+            let l = ValidationLimits::default();
+            let fixed = crate::kani_inputs::validated_arm();
+            let mut e = *fixed.estimate();
+            e.evidence.forearm_arc = l.min_arc;
+            e.evidence.upper_arm_arc = l.min_arc;
+            e.evidence.forearm_residual = l.max_residual;
+            e.evidence.upper_arm_residual = l.max_residual;
+            e.evidence.method_disagreement = Some(l.max_method_disagreement);
+            let start = Point::new(0.0, 0.0);
+            assert!(validate(&e, start, &l).is_ok());
+            let below = l.min_arc * (1.0 - 1e-9);
+            let above = l.max_residual * (1.0 + 1e-9);
+            for (change, rejection) in [
+                (
+                    FitEvidence {
+                        forearm_arc: below,
+                        ..e.evidence
+                    },
+                    Rejection::ForearmArcTooShort(below),
+                ),
+                (
+                    FitEvidence {
+                        upper_arm_arc: below,
+                        ..e.evidence
+                    },
+                    Rejection::UpperArmArcTooShort(below),
+                ),
+                (
+                    FitEvidence {
+                        forearm_residual: above,
+                        ..e.evidence
+                    },
+                    Rejection::ForearmResidualTooLarge(above),
+                ),
+                (
+                    FitEvidence {
+                        upper_arm_residual: above,
+                        ..e.evidence
+                    },
+                    Rejection::UpperArmResidualTooLarge(above),
+                ),
+            ] {
+                let changed = ArmEstimate {
+                    evidence: change,
+                    ..e
+                };
+                assert_eq!(validate(&changed, start, &l), Err(rejection));
+            }
+        }
+
         #[test]
         fn harnesses_under_the_stand_in() {
             kani::check(

@@ -1,0 +1,73 @@
+//! Planned motions against the closed form of `motion.rs`'s theory of
+//! operation: x_d(t) = start + s(τ) Δ, s(τ) = 10τ³ − 15τ⁴ + 6τ⁵, τ = t/T,
+//! T = 1.875 |Δ(x, z)| / v_max, and its first two derivatives; the goal
+//! held after T. The estimation motion follows its lift.
+
+use limb_kernel::geometry::Pose;
+use limb_kernel::motion::{EstimationMotion, EstimationMotionParameters, MinimumJerkMove};
+
+fn close(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-12 * (1.0 + b.abs())
+}
+
+#[test]
+fn minimum_jerk_set_points_follow_the_closed_form() {
+    let (start, goal) = (Pose::new(0.1, 0.2, 0.3), Pose::new(0.4, 0.6, 1.3));
+    let peak = 0.05;
+    let motion = MinimumJerkMove::new(start, goal, peak).unwrap();
+    let duration = 1.875 * 0.5 / peak; // |Δ(x, z)| = 0.5 m
+    assert!(close(motion.duration(), duration));
+    let delta = [goal.x - start.x, goal.z - start.z, goal.psi - start.psi];
+    for tau in [0.1, 0.25, 0.5, 0.8, 0.95] {
+        let t = tau * duration;
+        let s = 10.0 * tau.powi(3) - 15.0 * tau.powi(4) + 6.0 * tau.powi(5);
+        let ds = (30.0 * tau.powi(2) - 60.0 * tau.powi(3) + 30.0 * tau.powi(4)) / duration;
+        let dds = (60.0 * tau - 180.0 * tau.powi(2) + 120.0 * tau.powi(3)) / duration.powi(2);
+        let p = motion.at(t);
+        let start = [start.x, start.z, start.psi];
+        let got = [
+            [p.pose.x, p.pose.z, p.pose.psi],
+            [p.velocity.x, p.velocity.z, p.velocity.psi],
+            [p.acceleration.x, p.acceleration.z, p.acceleration.psi],
+        ];
+        for axis in 0..3 {
+            assert!(
+                close(got[0][axis], start[axis] + s * delta[axis]),
+                "pose at τ {tau}"
+            );
+            assert!(close(got[1][axis], ds * delta[axis]), "velocity at τ {tau}");
+            assert!(
+                close(got[2][axis], dds * delta[axis]),
+                "acceleration at τ {tau}"
+            );
+        }
+    }
+    assert_eq!(motion.at(duration * 1.5).pose, goal);
+    assert_eq!(motion.at(-1.0).pose, start);
+}
+
+#[test]
+fn the_estimation_motion_is_its_lift_then_a_hold() {
+    let parameters = EstimationMotionParameters::default();
+    let motion = EstimationMotion::new(Pose::new(0.0, 0.0, 0.1), &parameters).unwrap();
+    let lift = *motion.lift();
+    for t in [0.0, 1.0, 5.0, lift.duration() * 0.5, lift.duration() + 1.0] {
+        assert_eq!(motion.at(t), lift.at(t));
+    }
+    assert!(motion.at(lift.duration() * 0.5).velocity.x > 0.0);
+    assert!(close(
+        motion.total_duration(),
+        lift.duration() + parameters.hold_time
+    ));
+}
+
+#[test]
+fn a_zero_hold_is_a_valid_configuration_and_a_negative_one_is_not() {
+    use limb_kernel::config::ConfigError;
+    use limb_kernel::KernelConfig;
+    let mut config = KernelConfig::default();
+    config.estimation_motion.hold_time = 0.0;
+    assert_eq!(config.check(), Ok(()));
+    config.estimation_motion.hold_time = -1e-9;
+    assert_eq!(config.check(), Err(ConfigError::EstimationMotion));
+}
