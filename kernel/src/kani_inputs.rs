@@ -13,8 +13,8 @@ use limb_kani_stand_in as kani;
 use crate::arm::JointAngles;
 use crate::estimation::{ArmEstimate, FitEvidence, Method};
 use crate::geometry::{Point, Pose, PoseRate, Wrench};
-use crate::kernel::Request;
 use crate::path::PathSample;
+use crate::state::Request;
 use crate::validate::{validate, ValidatedArm, ValidationLimits};
 
 /// Any pose.

@@ -5,6 +5,7 @@
 use super::{at_most, within, Limit, Verdict, Violation};
 use crate::arm::ArmGeometry;
 use crate::config::Interval;
+use crate::estimation::online::JointEnvelope;
 use crate::geometry::Pose;
 
 /// Joint ranges of the person's arm.
@@ -32,9 +33,34 @@ impl JointLimitMonitor {
         )?;
         within(Limit::ElbowFlexion, q.elbow_flexion, self.elbow_flexion)
     }
+
+    /// Verdict on the worst-case joints of the provisional model during
+    /// Estimate (REQ-MON-011): the largest shoulder elevation must not
+    /// exceed its range, the smallest elbow flexion must not go below its
+    /// range (hyperextension). No envelope (no provisional model yet) is no
+    /// verdict: the lift's prior reach bounds the motion then.
+    pub fn check_envelope(&self, envelope: Option<JointEnvelope>) -> Verdict {
+        let Some(envelope) = envelope else {
+            return Ok(());
+        };
+        at_most(
+            Limit::ShoulderElevation,
+            envelope.max_shoulder_elevation,
+            self.shoulder_elevation.high,
+        )?;
+        if envelope.min_elbow_flexion >= self.elbow_flexion.low {
+            Ok(())
+        } else {
+            Err(Violation::new(
+                Limit::ElbowFlexion,
+                envelope.min_elbow_flexion,
+                self.elbow_flexion.low,
+            ))
+        }
+    }
 }
 
-/// Proof of the decidable part of REQ-MON-005.
+/// Proofs of the decidable part of REQ-MON-005 and of REQ-MON-011.
 #[cfg(any(test, kani))]
 mod verification {
     use super::*;
@@ -64,10 +90,10 @@ mod verification {
     /// what it tripped on. That it trips exactly outside the joint ranges is
     /// numerical (inverse kinematics through atan2): the proptest property
     /// `arbitrary_sessions_keep_every_safety_property` checks it against an
-    /// independent model. Unwind 16: the validator that makes the fixed
-    /// arm checks 15 values for finiteness.
+    /// independent model. Unwind 17: the validator that makes the fixed
+    /// arm checks 16 values for finiteness.
     #[cfg_attr(kani, kani::proof)]
-    #[cfg_attr(kani, kani::unwind(16))]
+    #[cfg_attr(kani, kani::unwind(17))]
     #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
     #[cfg_attr(kani, kani::stub(libm::atan2, crate::kani_stubs::stub::atan2))]
     #[cfg_attr(kani, kani::stub(libm::sin, crate::kani_stubs::stub::sin))]
@@ -90,12 +116,68 @@ mod verification {
         );
     }
 
+    /// REQ-MON-011: the Estimate verdict on the provisional model's worst
+    /// case trips exactly when the largest shoulder elevation is above the
+    /// range or the smallest elbow flexion below it (NaN included), naming
+    /// that joint; no envelope yet is no verdict.
+    pub fn check_envelope_verdict(
+        monitor: &JointLimitMonitor,
+        envelope: JointEnvelope,
+        verdict: Verdict,
+    ) -> Result<(), &'static str> {
+        let shoulder_ok = envelope.max_shoulder_elevation <= monitor.shoulder_elevation.high;
+        let elbow_ok = envelope.min_elbow_flexion >= monitor.elbow_flexion.low;
+        match verdict {
+            Ok(()) if shoulder_ok && elbow_ok => Ok(()),
+            Ok(()) => Err("a worst case beyond a joint limit passed"),
+            Err(_) if shoulder_ok && elbow_ok => Err("a worst case within the limits tripped"),
+            Err(v) if v.limit == Limit::ShoulderElevation && !shoulder_ok => Ok(()),
+            Err(v) if v.limit == Limit::ElbowFlexion && !elbow_ok => Ok(()),
+            Err(_) => Err("the envelope trip names a joint within its limit"),
+        }
+    }
+
+    /// REQ-MON-011: for any worst-case joints (NaN and infinities
+    /// included) the Estimate joint-limit monitor trips exactly beyond the
+    /// limits, and passes while no provisional model exists. Comparisons
+    /// only: no loop, no libm.
+    #[cfg_attr(kani, kani::proof)]
+    pub fn verify_req_mon_011_envelope_monitor_trips_beyond_limits() {
+        let l = SafetyLimits::default();
+        let monitor = JointLimitMonitor {
+            shoulder_elevation: l.shoulder_elevation,
+            elbow_flexion: l.elbow_flexion,
+            max_model_mismatch: l.max_model_mismatch,
+        };
+        let envelope = JointEnvelope {
+            max_shoulder_elevation: kani::any(),
+            min_elbow_flexion: kani::any(),
+        };
+        let verdict = monitor.check_envelope(Some(envelope));
+        assert_eq!(check_envelope_verdict(&monitor, envelope, verdict), Ok(()));
+        assert_eq!(monitor.check_envelope(None), Ok(()));
+        kani::cover!(verdict.is_ok(), "envelope monitor: passes");
+        kani::cover!(
+            verdict.is_err_and(|v| v.limit == Limit::ElbowFlexion),
+            "envelope monitor: hyperextension trips"
+        );
+        kani::cover!(
+            verdict.is_err_and(|v| v.limit == Limit::ShoulderElevation),
+            "envelope monitor: shoulder trips"
+        );
+    }
+
     #[cfg(test)]
     mod tests {
         use super::*;
 
         #[test]
         fn harnesses_under_the_stand_in() {
+            kani::check(
+                "envelope monitor",
+                20_000,
+                verify_req_mon_011_envelope_monitor_trips_beyond_limits,
+            );
             kani::check(
                 "joint-limit monitor",
                 20_000,
