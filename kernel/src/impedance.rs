@@ -315,6 +315,10 @@ mod verification {
         set_point: &SetPoint,
     ) -> Result<(), &'static str> {
         let ensure = |ok: bool, failure| if ok { Ok(()) } else { Err(failure) };
+        ensure(
+            !raw.saturation.force && !raw.saturation.torque,
+            "the reference law without wrench limits saturated the wrench",
+        )?;
         let w = out.wrench;
         ensure(w.is_finite(), "the wrench is not finite")?;
         let force = law.max_force * (1.0 + ROUNDING);
