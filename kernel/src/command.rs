@@ -123,3 +123,77 @@ impl Command {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::{Pose, PoseRate};
+
+    fn hold() -> Command {
+        Command {
+            state: StateKind::Grasp,
+            mode: CommandMode::Hold,
+            set_point: Some(SetPoint::hold(Pose::default())),
+            wrench: Wrench::new(1.0, 2.0, 0.5),
+            saturation: Saturation::default(),
+        }
+    }
+
+    /// Each invariant, broken alone, is reported; a valid command passes.
+    #[test]
+    fn each_broken_invariant_is_named() {
+        let limits = SafetyLimits::default();
+        assert_eq!(hold().check(&limits), Ok(()));
+        let mut moving = hold();
+        if let Some(s) = moving.set_point.as_mut() {
+            s.velocity = PoseRate::new(0.0, 0.0, 0.1);
+        }
+        let stop = Command {
+            state: StateKind::SafeStop,
+            mode: CommandMode::Stop,
+            ..hold()
+        };
+        let cases = [
+            (
+                Command {
+                    wrench: Wrench::new(f64::NAN, 0.0, 0.0),
+                    ..hold()
+                },
+                "command is not finite",
+            ),
+            (
+                Command {
+                    wrench: Wrench::new(0.0, 46.0, 0.0),
+                    ..hold()
+                },
+                "a commanded force component exceeds the force limit",
+            ),
+            (
+                Command {
+                    wrench: Wrench::new(40.0, 40.0, 0.0),
+                    ..hold()
+                },
+                "commanded force exceeds the force limit",
+            ),
+            (
+                Command {
+                    wrench: Wrench::new(0.0, 0.0, -8.5),
+                    ..hold()
+                },
+                "commanded torque exceeds the torque limit",
+            ),
+            (moving, "a hold or stop command moves the set-point"),
+            (
+                Command {
+                    mode: CommandMode::Stop,
+                    ..hold()
+                },
+                "stop mode and SafeStop disagree",
+            ),
+            (stop, "a stop command applies a wrench"),
+        ];
+        for (command, failure) in cases {
+            assert_eq!(command.check(&limits), Err(failure), "{command:?}");
+        }
+    }
+}
