@@ -362,6 +362,31 @@ mod verification {
     mod tests {
         use super::*;
 
+        /// Both inverses round-trip for a shoulder off the table line too
+        /// (every other test puts it at z = 0).
+        #[test]
+        fn inverses_round_trip_with_a_raised_shoulder() {
+            let arm = ArmGeometry::new(0.3, 0.2, Point::new(0.5, 0.07)).expect("valid");
+            let q = JointAngles {
+                shoulder_elevation: 0.7,
+                elbow_flexion: 0.9,
+            };
+            let pose = arm.forward(q);
+            let (back, residual) = arm.inverse_from_pose(pose).expect("reachable");
+            assert!(residual < 1e-12);
+            let point = arm
+                .inverse_from_point(pose.point(), ElbowBranch::Flexed)
+                .expect("reachable");
+            for (a, b) in [
+                (back.shoulder_elevation, q.shoulder_elevation),
+                (back.elbow_flexion, q.elbow_flexion),
+                (point.shoulder_elevation, q.shoulder_elevation),
+                (point.elbow_flexion, q.elbow_flexion),
+            ] {
+                assert!((a - b).abs() < 1e-9, "{a} vs {b}");
+            }
+        }
+
         #[test]
         fn harnesses_under_the_stand_in() {
             kani::check(

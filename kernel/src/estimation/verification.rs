@@ -259,6 +259,22 @@ mod tests {
     }
 
     #[test]
+    fn a_path_beyond_the_capacity_is_refused() {
+        use crate::path::PATH_CAPACITY;
+        let lift = short_lift(N);
+        let mut long = [PathSample::default(); PATH_CAPACITY + 1];
+        long[..N].copy_from_slice(&lift);
+        assert_eq!(
+            estimate_arm(&long, Method::Ls),
+            Err(EstimateError::PathTooLong)
+        );
+        assert_ne!(
+            estimate_arm(&long[..PATH_CAPACITY], Method::Ls),
+            Err(EstimateError::PathTooLong)
+        );
+    }
+
+    #[test]
     fn the_short_lift_is_estimated() {
         let path = short_lift(N);
         let estimate = estimate_arm(&path, Method::Ls).expect("the short lift is estimated");
