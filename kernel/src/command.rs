@@ -191,6 +191,13 @@ mod tests {
                 "stop mode and SafeStop disagree",
             ),
             (stop, "a stop command applies a wrench"),
+            (
+                Command {
+                    wrench: Wrench::new(0.0, 0.0, 0.5),
+                    ..stop
+                },
+                "a stop command applies a wrench",
+            ),
         ];
         for (command, failure) in cases {
             assert_eq!(command.check(&limits), Err(failure), "{command:?}");
