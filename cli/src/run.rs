@@ -295,6 +295,15 @@ pub fn human(report: &SessionReport, header: &str) -> String {
             let _ = writeln!(out, "  {:>8.3} s  {}", line.time, line.what);
         }
     }
+    let st = &report.step_time;
+    let _ = writeln!(
+        out,
+        "step time (wall): median {:.2} µs, p99.9 {:.2} µs, max {:.1} µs in {:?}",
+        st.median_s * 1e6,
+        st.p999_s * 1e6,
+        st.max_s * 1e6,
+        st.max_state,
+    );
     let _ = writeln!(
         out,
         "final state: {:?} after {} kernel steps ({} with saturation); session {}",

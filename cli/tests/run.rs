@@ -20,8 +20,9 @@ fn limb(args: &[&str]) -> (i32, String, String) {
 /// person's elbow hyperextends at most 5° and the shoulder stays inside its
 /// configured limit during Estimate (the plant's true joints), and the
 /// model is within 0.55 mm of the truth, the README's figure (measured
-/// with the online estimator: worst 0.49 mm on l1, 0.08 mm on l2 and
-/// 0.53 mm on the shoulder, for l1 0.27 m, l2 0.18 m, default seed).
+/// with the online estimator and shaped lift: worst 0.47 mm on l1 and
+/// 0.51 mm on the shoulder for l1 0.27 m, l2 0.18 m, 0.08 mm on l2 for the
+/// short arm; default seed).
 /// `step_time` and `joint_extremes` are reported as `../shared/spec/cli.md`
 /// says.
 #[test]

@@ -13,9 +13,11 @@
 //!      │   ◀─────────────────────── provisional forearm ────┘ (or, after
 //!      │                                forearm_wait, EstimationFailed)
 //!      │ upper-arm arc ≥ target_arc │ joint envelope within joint_margin of
-//!      │ a limit │ planned lift complete
+//!      │ a limit │ planned lift and its extension (0.1 m on along the same
+//!      │ line, for long arms) complete
 //!      ▼
-//!   Settling (set-point frozen, still recording, settle_time)
+//!   Settling (a minimum-jerk move to the holding pose x − f_ext/K at
+//!      │      hold_speed / hold_rate, then held for settle_time; recording)
 //!      ▼
 //!   Concluding (held still; the refinement runs SAMPLES_PER_STEP per step)
 //! ```
@@ -34,7 +36,7 @@ use crate::estimation::online::{JointEnvelope, OnlineEstimator};
 use crate::estimation::refine::Refinement;
 use crate::geometry::Pose;
 use crate::monitor::Limit;
-use crate::motion::{EstimationMotion, SetPoint};
+use crate::motion::{EstimationMotion, MinimumJerkMove, SetPoint};
 use crate::path::PathSample;
 
 /// How the kernel shapes and ends its estimation lift.
@@ -57,6 +59,21 @@ pub struct LiftShaping {
     /// Time the set-point is held after the lift ends, still recording,
     /// before the conclusion [s].
     pub settle_time: f64,
+    /// Peak grasp-point speed of the move from the lift's set-point to the
+    /// holding pose [m/s]; the move is ≈ 3 cm (the dynamic part of the
+    /// spring's stretch). A jump would reach a position-controlled robot
+    /// (KUKA joint-position overlay) as a step of the joint targets.
+    pub hold_speed: f64,
+    /// Peak forearm rate of that move [rad/s] (psi's set-point lags the arm
+    /// by up to 0.5 rad at the end of the lift).
+    pub hold_rate: f64,
+    /// How far the lift continues along its line when the planned lift is
+    /// complete before the arcs suffice [m] (long arms).
+    pub extension: f64,
+    /// Shortest duration of that move [s]: a 3 mm move (force noise / K) in
+    /// 56 ms accelerates the set-point at 5.5 m/s², 11 N of inertia
+    /// feed-forward, and tripped the force-rate monitor.
+    pub hold_move_time: f64,
 }
 
 impl Default for LiftShaping {
@@ -67,6 +84,10 @@ impl Default for LiftShaping {
             target_arc: 0.9,
             joint_margin: 0.10,
             settle_time: 1.0,
+            hold_speed: 0.10,
+            hold_rate: 0.5,
+            hold_move_time: 1.0,
+            extension: 0.10,
         }
     }
 }
@@ -80,6 +101,10 @@ impl LiftShaping {
             self.target_arc,
             self.joint_margin,
             self.settle_time,
+            self.hold_speed,
+            self.hold_rate,
+            self.hold_move_time,
+            self.extension,
         ]
         .iter()
         .all(|v| v.is_finite() && *v > 0.0)
@@ -94,7 +119,7 @@ pub enum LiftEnd {
     ArcReached,
     /// The joint envelope came within the margin of this limit.
     JointMargin(Limit),
-    /// The planned lift was complete.
+    /// The planned lift and its extension were complete.
     MotionComplete,
 }
 
@@ -111,18 +136,21 @@ pub enum LiftPhase {
         /// Kernel time the pause began [s].
         since: f64,
     },
-    /// Set-point frozen, arm settling, path still recorded.
+    /// Moving to the holding pose, then holding it; arm settling, path still
+    /// recorded.
     Settling {
         /// Kernel time the lift ended [s].
         since: f64,
-        /// The frozen set-point.
+        /// From the lift's last set-point to the holding pose.
+        to_hold: MinimumJerkMove,
+        /// The holding pose.
         hold: Pose,
         /// Why the lift ended.
         reason: LiftEnd,
     },
     /// Held still while the estimate is refined.
     Concluding {
-        /// The frozen set-point.
+        /// The holding pose.
         hold: Pose,
         /// Why the lift ended.
         reason: LiftEnd,
@@ -134,10 +162,13 @@ pub enum LiftPhase {
 /// The shaped lift.
 ///
 /// # Invariants
-/// `clock` ∈ [0, planned duration]; it advances only while Lifting.
+/// `clock` ∈ [0, duration of `segment`]; it advances only while Lifting.
+/// `segment` is the planned lift, then (once, if `extended`) its extension.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShapedLift {
     motion: EstimationMotion,
+    segment: MinimumJerkMove,
+    extended: bool,
     clock: f64,
     last_now: f64,
     phase: LiftPhase,
@@ -157,6 +188,8 @@ impl ShapedLift {
     pub fn new(motion: EstimationMotion, now: f64) -> Self {
         Self {
             motion,
+            segment: *motion.lift(),
+            extended: false,
             clock: 0.0,
             last_now: now,
             phase: LiftPhase::Lifting,
@@ -185,8 +218,11 @@ impl ShapedLift {
 
     /// Advances the lift to kernel time `now` given the online estimate
     /// (already updated with this step's sample) and the measured `pose`.
-    /// Returns the command, or `Err(Some(refinement start))`-free: the
-    /// caller starts the conclusion when [`Self::settled`] says so.
+    /// The caller starts the conclusion when [`Self::settled`] says so.
+    ///
+    /// # Errors
+    /// No provisional forearm within `forearm_wait`, or a move that cannot
+    /// be planned (non-finite).
     pub fn advance(
         &mut self,
         now: f64,
@@ -203,31 +239,46 @@ impl ShapedLift {
         self.last_now = self.last_now.max(now);
         match self.phase {
             LiftPhase::Lifting => {
-                let duration = self.motion.lift().duration();
+                let duration = self.segment.duration();
                 let next = (self.clock + dt).min(duration);
-                let set_point = self.motion.at(next);
+                let set_point = self.segment.at(next);
                 let start = self.motion.lift().start().point();
                 if online.forearm().is_none()
                     && set_point.pose.point().distance(start) > shaping.prior_reach
                 {
                     self.phase = LiftPhase::AwaitingForearm { since: now };
                     return Ok(LiftCommand::Hold(SetPoint::hold(
-                        self.motion.at(self.clock).pose,
+                        self.segment.at(self.clock).pose,
                     )));
                 }
                 self.clock = next;
                 let envelope = online.joint_envelope(frame.pose, &config.validation);
-                let reason = end_reason(online, envelope, shaping, &config.limits)
-                    .or((next >= duration).then_some(LiftEnd::MotionComplete));
+                let mut reason = end_reason(online, envelope, shaping, &config.limits);
+                if reason.is_none() && next >= duration {
+                    if self.extended {
+                        reason = Some(LiftEnd::MotionComplete);
+                    } else {
+                        self.extend(config)?;
+                    }
+                }
                 match reason {
                     Some(reason) => {
                         let hold = holding_pose(frame, &config.impedance.stiffness);
+                        let to_hold = MinimumJerkMove::bounded(
+                            set_point.pose,
+                            hold,
+                            shaping.hold_speed,
+                            shaping.hold_rate,
+                            shaping.hold_move_time,
+                        )
+                        .map_err(|_| crate::estimation::EstimateError::NonFiniteSample)?;
                         self.phase = LiftPhase::Settling {
                             since: now,
+                            to_hold,
                             hold,
                             reason,
                         };
-                        Ok(LiftCommand::Hold(SetPoint::hold(hold)))
+                        Ok(LiftCommand::Move(to_hold.at(0.0)))
                     }
                     None => Ok(LiftCommand::Move(set_point)),
                 }
@@ -242,21 +293,43 @@ impl ShapedLift {
                     self.motion.at(self.clock).pose,
                 )))
             }
+            LiftPhase::Settling { since, to_hold, .. } if now - since < to_hold.duration() => {
+                Ok(LiftCommand::Move(to_hold.at(now - since)))
+            }
             LiftPhase::Settling { hold, .. } | LiftPhase::Concluding { hold, .. } => {
                 Ok(LiftCommand::Hold(SetPoint::hold(hold)))
             }
         }
     }
 
-    /// When Settling for at least `settle_time` at `now`: the frozen pose and
-    /// why the lift ended.
+    /// Continues the completed lift along its line by
+    /// [`LiftShaping::extension`] at the lift's peak speed (long arms sweep
+    /// too little upper-arm arc on plant.md's lift: 0.64 rad for l1 0.38 m,
+    /// l2 0.26 m).
+    fn extend(&mut self, config: &KernelConfig) -> Result<(), crate::estimation::EstimateError> {
+        let start = self.segment.start();
+        let goal = self.segment.goal();
+        let (dx, dz) = (goal.x - start.x, goal.z - start.z);
+        let length = libm::hypot(dx, dz);
+        let reach = config.lift_shaping.extension / length.max(f64::EPSILON);
+        let extended = Pose::new(goal.x + reach * dx, goal.z + reach * dz, goal.psi);
+        self.segment = MinimumJerkMove::new(goal, extended, config.estimation_motion.peak_speed)
+            .map_err(|_| crate::estimation::EstimateError::NonFiniteSample)?;
+        self.clock = 0.0;
+        self.extended = true;
+        Ok(())
+    }
+
+    /// When the holding pose has been reached and held for `settle_time` at
+    /// `now`: the pose and why the lift ended.
     pub fn settled(&self, now: f64, settle_time: f64) -> Option<(Pose, LiftEnd)> {
         match self.phase {
             LiftPhase::Settling {
                 since,
+                to_hold,
                 hold,
                 reason,
-            } if now - since >= settle_time => Some((hold, reason)),
+            } if now - since >= to_hold.duration() + settle_time => Some((hold, reason)),
             _ => None,
         }
     }

@@ -1,9 +1,11 @@
 //! The typed states of a session and the transitions between them.
 //!
 //! ```text
-//!            StartEstimation           motion done,          ApproveManipulation
+//!            StartEstimation        refinement done,        ApproveManipulation
 //!   Grasp ──────────────────▶ Estimate ─────────────▶ Validated ──────────────▶ Manipulate
-//!     ▲                          │      validator ok     ▲  │                      │
+//!     ▲          (lifting → settling │      validator ok     ▲  │                      │
+//!     │           → concluding, see  │                       │  │                      │
+//!     │           crate::lift)       │                       │  │                      │
 //!     │ Reset                    │                       │  └──────────────────────┘
 //!     │                          ▼                       │     FinishManipulation
 //!  SafeStop ◀──── any violation, Stop, rejected estimate, failure (from every state)
@@ -18,9 +20,12 @@
 //! `Manipulate` without a validated model does not compile. [`SafeStop`] is
 //! latched: its only exit is [`SafeStop::reset`], back to [`Grasp`].
 //!
-//! The runtime wrapper ([`crate::kernel`]) holds one of these in an enum
-//! and refuses, with a reason, any request the current state has no
-//! transition for.
+//! The runtime wrapper ([`crate::kernel`]) holds one of these in [`State`]
+//! and refuses, with a reason ([`Refusal`]), any [`Request`] the current
+//! state has no transition for. [`Estimate::advance`] does one step of the
+//! estimation (record, shape the lift, or a slice of the refinement); when
+//! it returns [`EstimateStep::Concluded`] the kernel calls
+//! [`Estimate::conclude`].
 
 use crate::arm::JointAngles;
 use crate::config::{ConfigError, KernelConfig};

@@ -56,7 +56,7 @@ fn replay(log: &[PathSample], config: KernelConfig) -> Kernel {
         kernel.step(frame, frame.time);
     }
     let mut last = *log.last().unwrap();
-    for _ in 0..500 {
+    for _ in 0..3000 {
         if kernel.state().kind() != StateKind::Estimate {
             break;
         }
