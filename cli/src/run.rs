@@ -13,25 +13,23 @@
 //!
 //! Time: the kernel runs at `--rate` (1 kHz, the FRI rate, by default); the
 //! plant integrates at its own 0.5 ms step in between.
+//!
+//! The loop itself is [`limb_sim::session::run`], the same `no_std` code
+//! the firmware runs on a Cortex-M7; `--digest` prints the session in the
+//! canonical text the firmware prints, for comparing the two.
 
 use crate::error::{emit, print_json, CliError};
 use limb_kernel::geometry::Point;
 use limb_kernel::motion::SetPoint;
-use limb_kernel::trace::{Cause, Event};
-use limb_kernel::{Kernel, KernelConfig, PathSample, Request, StateKind};
+use limb_kernel::trace::{Cause, Event, TraceEvent};
+use limb_kernel::{Kernel, KernelConfig, PathSample, StateKind};
 pub use limb_sim::operator::SessionPlan;
-use limb_sim::operator::{completes_session, describe, FittedModel, Operator};
+use limb_sim::operator::{describe, FittedModel};
+use limb_sim::session::{self, Digest, EventLine, Observer, Outcome};
 use serde::Serialize;
 
-/// A plant the kernel can close the loop on.
-pub trait ClosedLoopPlant {
-    /// Plant time [s].
-    fn time(&self) -> f64;
-    /// What a robot measures now: time stamp, grasp pose, wrench (frame S).
-    fn measure(&mut self) -> PathSample;
-    /// Advances the plant by `duration` seconds with the robot's impedance
-    /// following `set_point` (held when the kernel gives none).
-    fn advance(&mut self, set_point: Option<&SetPoint>, duration: f64);
+/// A plant the kernel can close the loop on, with its ground truth.
+pub trait ClosedLoopPlant: session::ClosedLoopPlant {
     /// Ground truth: l1, l2 [m], elbow at t = 0 and shoulder [m], frame S.
     fn truth(&self) -> Truth;
 }
@@ -96,6 +94,38 @@ pub struct SessionReport {
     pub saturated_commands: u64,
     /// Kernel steps taken.
     pub steps: u64,
+    /// FNV-1a hash of every command issued, hex (`limb_sim::session::CommandHash`).
+    pub command_hash: String,
+    /// The session in the canonical text of `--digest`.
+    #[serde(skip)]
+    pub digest: String,
+}
+
+/// Collects the session's record for the report.
+#[derive(Default)]
+struct Recorder {
+    events: Vec<Line>,
+    monitor_events: Vec<Line>,
+    digest: String,
+}
+
+impl<P: ?Sized> Observer<P> for Recorder {
+    fn event(&mut self, event: &TraceEvent) {
+        use std::fmt::Write;
+        let line = Line {
+            time: event.time,
+            what: describe(event),
+        };
+        if let Event::Transition {
+            cause: Cause::Stop(limb_kernel::StopReason::Monitor(_)),
+            ..
+        } = event.event
+        {
+            self.monitor_events.push(line.clone());
+        }
+        self.events.push(line);
+        let _ = writeln!(self.digest, "{}", EventLine(event));
+    }
 }
 
 /// Runs one session of `kernel` on `plant` following `plan`.
@@ -104,61 +134,26 @@ pub fn run_session(
     plant: &mut dyn ClosedLoopPlant,
     plan: &SessionPlan,
 ) -> SessionReport {
-    let period = 1.0 / plan.rate;
-    let mut report = SessionReport {
-        events: Vec::new(),
-        monitor_events: Vec::new(),
-        truth: plant.truth(),
-        model: None,
-        final_state: StateKind::Grasp,
-        completed: false,
-        saturated_commands: 0,
-        steps: 0,
-    };
-    let mut operator = Operator::new(*plan);
-    while plant.time() < plan.timeout {
-        let frame = plant.measure();
-        let now = frame.time;
-        let request = operator.request(kernel.state().kind(), now);
-        if let Some(request) = request {
-            if matches!(request, Request::ApproveManipulation(_)) {
-                report.model = kernel
-                    .state()
-                    .arm()
-                    .map(|arm| model_report(arm, &report.truth));
-            }
-            let _ = kernel.request(request, now);
-        }
-        let command = kernel.step(&frame, now);
-        report.steps += 1;
-        report.saturated_commands += u64::from(command.saturation.any());
-        while let Some(event) = kernel.pop_event() {
-            let line = Line {
-                time: event.time,
-                what: describe(&event),
-            };
-            if let Event::Transition {
-                cause: Cause::Stop(limb_kernel::StopReason::Monitor(_)),
-                ..
-            } = event.event
-            {
-                report.monitor_events.push(line.clone());
-            }
-            report.completed |= completes_session(&event);
-            report.events.push(line);
-        }
-        operator.observe(command);
-        if report.completed || command.state == StateKind::SafeStop {
-            break;
-        }
-        plant.advance(command.set_point.as_ref(), period);
+    let truth = plant.truth();
+    let mut recorder = Recorder::default();
+    let outcome: Outcome = session::run(kernel, plant, plan, &mut recorder);
+    let mut digest = recorder.digest;
+    digest.push_str(&Digest(&outcome).to_string());
+    SessionReport {
+        events: recorder.events,
+        monitor_events: recorder.monitor_events,
+        truth,
+        model: outcome.model.map(|m| model_report(&m, &truth)),
+        final_state: outcome.final_state,
+        completed: outcome.completed,
+        saturated_commands: outcome.saturated_commands,
+        steps: outcome.steps,
+        command_hash: format!("{:016x}", outcome.command_hash),
+        digest,
     }
-    report.final_state = kernel.state().kind();
-    report
 }
 
-fn model_report(arm: &limb_kernel::validate::ValidatedArm, truth: &Truth) -> ModelReport {
-    let model = FittedModel::of(arm);
+fn model_report(model: &FittedModel, truth: &Truth) -> ModelReport {
     ModelReport {
         l1: model.upper_arm_length,
         l2: model.forearm_length,
@@ -226,24 +221,21 @@ pub fn human(report: &SessionReport, header: &str) -> String {
 /// The reference plant of `limb-sim` behind [`ClosedLoopPlant`].
 pub struct ReferencePlant(pub limb_sim::Plant);
 
-impl ClosedLoopPlant for ReferencePlant {
+impl session::ClosedLoopPlant for ReferencePlant {
     fn time(&self) -> f64 {
         self.0.time()
     }
 
     fn measure(&mut self) -> PathSample {
-        let m = self.0.measure();
-        PathSample {
-            time: m.time,
-            pose: m.pose,
-            wrench: m.wrench,
-        }
+        session::ClosedLoopPlant::measure(&mut self.0)
     }
 
     fn advance(&mut self, set_point: Option<&SetPoint>, duration: f64) {
-        limb_sim::closed_loop::advance(&mut self.0, set_point, duration);
+        session::ClosedLoopPlant::advance(&mut self.0, set_point, duration);
     }
+}
 
+impl ClosedLoopPlant for ReferencePlant {
     fn truth(&self) -> Truth {
         let a = &self.0.params().arm;
         let t = self.0.truth();
@@ -295,6 +287,10 @@ pub struct RunArgs {
     /// Print one JSON object instead of the human report.
     #[arg(long)]
     pub json: bool,
+    /// Print only the session's canonical digest (events, exact model,
+    /// command hash): the text the firmware prints on the target.
+    #[arg(long, conflicts_with = "json")]
+    pub digest: bool,
 }
 
 /// The kernel configuration for `args`, checked.
@@ -313,6 +309,8 @@ pub fn config(args: &RunArgs) -> Result<KernelConfig, CliError> {
 pub fn output(report: &SessionReport, args: &RunArgs, header: &str) -> Result<(), CliError> {
     if args.json {
         print_json(report)
+    } else if args.digest {
+        emit(&format!("{}\n", report.digest))
     } else {
         emit(&human(report, header))
     }

@@ -22,7 +22,8 @@
 //! (the recorded grasp path), [`estimation`] (circle fits, Hough),
 //! [`validate`] (the only maker of [`validate::ValidatedArm`]), [`state`]
 //! (typed states and transitions), [`monitor`], [`impedance`], [`command`],
-//! [`trace`], [`config`], and [`kernel`] (the runtime wrapper).
+//! [`trace`], [`config`], [`linear`] (small linear systems, no panic
+//! path), and [`kernel`] (the runtime wrapper).
 
 #![no_std]
 #![forbid(unsafe_code)]
@@ -42,6 +43,7 @@ pub mod estimation;
 pub mod geometry;
 pub mod impedance;
 pub mod kernel;
+pub mod linear;
 pub mod monitor;
 pub mod motion;
 pub mod path;
