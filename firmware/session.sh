@@ -10,8 +10,9 @@
 #   4. fails when the target session did not complete or its stack outgrew
 #      the budget (the firmware's exit code).
 # Usage: firmware/session.sh [--debug-host]   (--debug-host: use the host's
-# debug build, as CI does after `cargo test`; same numbers, the kernel and
-# plant are optimised in every profile and IEEE arithmetic is exact)
+# debug `limb`, built when missing, as CI does right after `cargo test`; the
+# same numbers: kernel and plant are optimised in every profile and IEEE
+# arithmetic is exact)
 set -euo pipefail
 cd "$(dirname "$0")"
 profile=release
@@ -23,7 +24,7 @@ cargo build --release --locked --bin session
 elf=target/thumbv7em-none-eabihf/release/session
 if [[ $profile == release ]]; then
   (cd .. && cargo build --release --locked -p limb-cli)
-else
+elif [[ ! -x ../target/debug/limb ]]; then
   (cd .. && cargo build --locked -p limb-cli)
 fi
 

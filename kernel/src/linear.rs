@@ -51,7 +51,7 @@ pub fn solve<const N: usize>(mut a: [[f64; N]; N], mut b: [f64; N]) -> Option<[f
             }
             let factor = -element(&a, i, k);
             for row in a.iter_mut().skip(i + 1) {
-                row[k] = factor * row[i] + row[k];
+                row[k] += factor * row[i];
             }
         }
     }
@@ -64,7 +64,7 @@ pub fn solve<const N: usize>(mut a: [[f64; N]; N], mut b: [f64; N]) -> Option<[f
     for i in 0..N {
         let coefficient = -b[i];
         for (r, row) in a.iter().enumerate().skip(i + 1) {
-            b[r] = coefficient * row[i] + b[r];
+            b[r] += coefficient * row[i];
         }
     }
     for i in (0..N).rev() {
@@ -75,7 +75,7 @@ pub fn solve<const N: usize>(mut a: [[f64; N]; N], mut b: [f64; N]) -> Option<[f
         let coefficient = b[i] / diag;
         b[i] = coefficient;
         for (r, row) in a.iter().enumerate().take(i) {
-            b[r] = -coefficient * row[i] + b[r];
+            b[r] -= coefficient * row[i];
         }
     }
     Some(b)
