@@ -15,21 +15,33 @@
 //! plant integrates at its own 0.5 ms step in between.
 //!
 //! The loop itself is [`limb_sim::session::run`], the same `no_std` code
-//! the firmware runs on a Cortex-M7; `--digest` prints the session in the
-//! canonical text the firmware prints, for comparing the two.
+//! the firmware runs on a Cortex-M7; this runner observes it (step wall
+//! time, joint extremes, the `--log` rows, the events). `--digest` prints
+//! the session in the canonical text the firmware prints, for comparing
+//! the two.
 
 use crate::error::{emit, print_json, CliError};
 use limb_kernel::geometry::Point;
 use limb_kernel::motion::SetPoint;
 use limb_kernel::trace::{Cause, Event, TraceEvent};
-use limb_kernel::{Kernel, KernelConfig, PathSample, StateKind};
+use limb_kernel::{Command, Kernel, KernelConfig, StateKind};
+use limb_sim::log::Record;
 pub use limb_sim::operator::SessionPlan;
 use limb_sim::operator::{describe, FittedModel};
-use limb_sim::session::{self, Digest, EventLine, Observer, Outcome};
+use limb_sim::session::{self, Digest, EventLine, Observer};
+use limb_sim::Measurement;
 use serde::Serialize;
+use std::collections::BTreeMap;
+use std::time::Instant;
 
 /// A plant the kernel can close the loop on, with its ground truth.
 pub trait ClosedLoopPlant: session::ClosedLoopPlant {
+    /// The person's true joint angles now, exact [rad]: shoulder elevation
+    /// q1, elbow flexion q2.
+    fn joints(&self) -> [f64; 2];
+    /// Ground truth as the log records it (potentiometer-rounded joints,
+    /// elbow and shoulder, frame S).
+    fn logged_truth(&self) -> limb_sim::Truth;
     /// Ground truth: l1, l2 [m], elbow at t = 0 and shoulder [m], frame S.
     fn truth(&self) -> Truth;
 }
@@ -75,6 +87,29 @@ pub struct ModelReport {
     pub error_shoulder: f64,
 }
 
+/// Wall time of every `Kernel::step` of the session [s].
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct StepTime {
+    /// Median step.
+    pub median_s: f64,
+    /// 99.9th percentile.
+    pub p999_s: f64,
+    /// Slowest step.
+    pub max_s: f64,
+    /// The state the slowest step began in.
+    pub max_state: Option<StateKind>,
+}
+
+/// The person's joint extremes within one state, from the plant's true
+/// joints [rad].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct JointExtremes {
+    /// Largest elbow hyperextension, max(0, −q2).
+    pub max_hyperextension: f64,
+    /// Largest shoulder elevation q1.
+    pub max_shoulder_elevation: f64,
+}
+
 /// The whole session.
 #[derive(Clone, Debug, Serialize)]
 pub struct SessionReport {
@@ -94,6 +129,13 @@ pub struct SessionReport {
     pub saturated_commands: u64,
     /// Kernel steps taken.
     pub steps: u64,
+    /// Wall time of the kernel's steps.
+    pub step_time: StepTime,
+    /// Joint extremes per state (lower-case state name).
+    pub joint_extremes: BTreeMap<String, JointExtremes>,
+    /// Every step's measurement, command and truth, for `--log`.
+    #[serde(skip)]
+    pub log: Vec<Record>,
     /// FNV-1a hash of every command issued, hex (`limb_sim::session::CommandHash`).
     pub command_hash: String,
     /// The session in the canonical text of `--digest`.
@@ -101,15 +143,49 @@ pub struct SessionReport {
     pub digest: String,
 }
 
-/// Collects the session's record for the report.
+/// What `limb run` records of the session as it runs.
 #[derive(Default)]
 struct Recorder {
     events: Vec<Line>,
     monitor_events: Vec<Line>,
     digest: String,
+    started: Option<Instant>,
+    durations: Vec<(f64, StateKind)>,
+    joint_extremes: BTreeMap<String, JointExtremes>,
+    log: Vec<Record>,
 }
 
-impl<P: ?Sized> Observer<P> for Recorder {
+impl<P: ClosedLoopPlant + ?Sized> Observer<P> for Recorder {
+    fn before_step(&mut self, _: &P, _: &Measurement, _: StateKind) {
+        self.started = Some(Instant::now());
+    }
+
+    fn after_step(
+        &mut self,
+        plant: &P,
+        measurement: &Measurement,
+        state: StateKind,
+        command: &Command,
+    ) {
+        let elapsed = self.started.map_or(0.0, |s| s.elapsed().as_secs_f64());
+        self.durations.push((elapsed, state));
+        let [q1, q2] = plant.joints();
+        let extremes = self
+            .joint_extremes
+            .entry(format!("{state:?}").to_lowercase())
+            .or_default();
+        extremes.max_hyperextension = extremes.max_hyperextension.max(-q2);
+        extremes.max_shoulder_elevation = extremes.max_shoulder_elevation.max(q1);
+        self.log.push(Record {
+            time: measurement.time,
+            command: command.set_point.map(|s| s.pose),
+            pose: measurement.pose,
+            lateral: Some(measurement.lateral),
+            wrench: measurement.wrench,
+            truth: Some(plant.logged_truth()),
+        });
+    }
+
     fn event(&mut self, event: &TraceEvent) {
         use std::fmt::Write;
         let line = Line {
@@ -136,7 +212,7 @@ pub fn run_session(
 ) -> SessionReport {
     let truth = plant.truth();
     let mut recorder = Recorder::default();
-    let outcome: Outcome = session::run(kernel, plant, plan, &mut recorder);
+    let outcome = session::run(kernel, plant, plan, &mut recorder);
     let mut digest = recorder.digest;
     digest.push_str(&Digest(&outcome).to_string());
     SessionReport {
@@ -148,8 +224,30 @@ pub fn run_session(
         completed: outcome.completed,
         saturated_commands: outcome.saturated_commands,
         steps: outcome.steps,
+        step_time: step_time(&mut recorder.durations),
+        joint_extremes: recorder.joint_extremes,
+        log: recorder.log,
         command_hash: format!("{:016x}", outcome.command_hash),
         digest,
+    }
+}
+
+/// Median, 99.9th percentile and maximum of the step `durations`, with the
+/// state the slowest began in.
+fn step_time(durations: &mut [(f64, StateKind)]) -> StepTime {
+    let Some(&(max_s, max_state)) = durations.iter().max_by(|a, b| a.0.total_cmp(&b.0)) else {
+        return StepTime::default();
+    };
+    durations.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let quantile = |q: f64| {
+        let index = ((durations.len() - 1) as f64 * q).round() as usize;
+        durations[index.min(durations.len() - 1)].0
+    };
+    StepTime {
+        median_s: quantile(0.5),
+        p999_s: quantile(0.999),
+        max_s,
+        max_state: Some(max_state),
     }
 }
 
@@ -203,6 +301,15 @@ pub fn human(report: &SessionReport, header: &str) -> String {
             let _ = writeln!(out, "  {:>8.3} s  {}", line.time, line.what);
         }
     }
+    let st = &report.step_time;
+    let _ = writeln!(
+        out,
+        "step time (wall): median {:.2} µs, p99.9 {:.2} µs, max {:.1} µs in {:?}",
+        st.median_s * 1e6,
+        st.p999_s * 1e6,
+        st.max_s * 1e6,
+        st.max_state,
+    );
     let _ = writeln!(
         out,
         "final state: {:?} after {} kernel steps ({} with saturation); session {}",
@@ -226,16 +333,24 @@ impl session::ClosedLoopPlant for ReferencePlant {
         self.0.time()
     }
 
-    fn measure(&mut self) -> PathSample {
-        session::ClosedLoopPlant::measure(&mut self.0)
+    fn measure(&mut self) -> Measurement {
+        self.0.measure()
     }
 
     fn advance(&mut self, set_point: Option<&SetPoint>, duration: f64) {
-        session::ClosedLoopPlant::advance(&mut self.0, set_point, duration);
+        limb_sim::closed_loop::advance(&mut self.0, set_point, duration);
     }
 }
 
 impl ClosedLoopPlant for ReferencePlant {
+    fn joints(&self) -> [f64; 2] {
+        self.0.state().0
+    }
+
+    fn logged_truth(&self) -> limb_sim::Truth {
+        self.0.truth()
+    }
+
     fn truth(&self) -> Truth {
         let a = &self.0.params().arm;
         let t = self.0.truth();
@@ -261,6 +376,11 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
     );
     let plan = SessionPlan::default();
     let report = run_session(&mut kernel, &mut plant, &plan);
+    if let Some(file) = &args.log {
+        std::fs::write(file, limb_sim::log::to_csv(&report.log)).map_err(|error| {
+            CliError::BadInput(format!("{}: cannot write the log: {error}", file.display()))
+        })?;
+    }
     let header = format!(
         "limb run: reference plant, arm l1 = {:.3} m, l2 = {:.3} m, noise seed {}, kernel at {:.0} Hz, \
          force limit {:.1} N",
@@ -287,6 +407,10 @@ pub struct RunArgs {
     /// Print one JSON object instead of the human report.
     #[arg(long)]
     pub json: bool,
+    /// Write the session (every kernel step's measurement, commanded
+    /// set-point and the plant's truth) to this CSV in the plant.md format.
+    #[arg(long)]
+    pub log: Option<std::path::PathBuf>,
     /// Print only the session's canonical digest (events, exact model,
     /// command hash): the text the firmware prints on the target.
     #[arg(long, conflicts_with = "json")]

@@ -161,6 +161,10 @@ impl fmt::Display for Described<'_> {
                 "refused {:?} in {:?}: {:?}",
                 refusal.request, refusal.state, refusal.reason
             ),
+            Event::LiftEnded(reason) => write!(
+                f,
+                "lift ended: {reason:?}; holding while the estimate is refined"
+            ),
         }
     }
 }

@@ -26,6 +26,7 @@
 //! (`limb run --digest`) and the firmware both print for comparison.
 
 use crate::operator::{completes_session, Described, FittedModel, Operator, SessionPlan};
+use crate::plant::Measurement;
 use core::fmt;
 use limb_kernel::motion::SetPoint;
 use limb_kernel::trace::TraceEvent;
@@ -35,8 +36,9 @@ use limb_kernel::{Command, Kernel, PathSample, Request, StateKind};
 pub trait ClosedLoopPlant {
     /// Plant time [s].
     fn time(&self) -> f64;
-    /// What a robot measures now: time stamp, grasp pose, wrench (frame S).
-    fn measure(&mut self) -> PathSample;
+    /// What a robot measures now: time stamp, grasp pose, lateral y and
+    /// wrench (frame S); the kernel gets all but y.
+    fn measure(&mut self) -> Measurement;
     /// Advances the plant by `duration` seconds with the robot's impedance
     /// following `set_point` (held when the kernel gives none).
     fn advance(&mut self, set_point: Option<&SetPoint>, duration: f64);
@@ -47,13 +49,8 @@ impl ClosedLoopPlant for crate::Plant {
         crate::Plant::time(self)
     }
 
-    fn measure(&mut self) -> PathSample {
-        let m = crate::Plant::measure(self);
-        PathSample {
-            time: m.time,
-            pose: m.pose,
-            wrench: m.wrench,
-        }
+    fn measure(&mut self) -> Measurement {
+        crate::Plant::measure(self)
     }
 
     fn advance(&mut self, set_point: Option<&SetPoint>, duration: f64) {
@@ -63,16 +60,17 @@ impl ClosedLoopPlant for crate::Plant {
 
 /// What a session's runner watches. Every method has an empty default.
 pub trait Observer<P: ?Sized> {
-    /// Called immediately before `Kernel::step(frame, frame.time)`, with
-    /// the kernel's state then.
-    fn before_step(&mut self, _plant: &P, _frame: &PathSample, _state: StateKind) {}
-    /// Called immediately after the step returned `command`; `state` is
-    /// the state the step began in (the concluding Estimate step has
-    /// `state` Estimate and `command.state` Validated).
+    /// Called immediately before `Kernel::step` on the frame of
+    /// `measurement` (at its time), with the kernel's state then.
+    fn before_step(&mut self, _plant: &P, _measurement: &Measurement, _state: StateKind) {}
+    /// Called immediately after the step returned `command`, before the
+    /// plant advances; `state` is the state the step began in (the
+    /// concluding Estimate step has `state` Estimate and `command.state`
+    /// Validated).
     fn after_step(
         &mut self,
         _plant: &P,
-        _frame: &PathSample,
+        _measurement: &Measurement,
         _state: StateKind,
         _command: &Command,
     ) {
@@ -181,7 +179,12 @@ where
     let mut hash = CommandHash::default();
     let mut operator = Operator::new(*plan);
     while plant.time() < plan.timeout {
-        let frame = plant.measure();
+        let measurement = plant.measure();
+        let frame = PathSample {
+            time: measurement.time,
+            pose: measurement.pose,
+            wrench: measurement.wrench,
+        };
         let now = frame.time;
         if let Some(request) = operator.request(kernel.state().kind(), now) {
             if matches!(request, Request::ApproveManipulation(_)) {
@@ -191,9 +194,9 @@ where
             let _ = kernel.request(request, now);
         }
         let state = kernel.state().kind();
-        observer.before_step(plant, &frame, state);
+        observer.before_step(plant, &measurement, state);
         let command = kernel.step(&frame, now);
-        observer.after_step(plant, &frame, state, &command);
+        observer.after_step(plant, &measurement, state, &command);
         hash.push(&command);
         outcome.steps += 1;
         outcome.saturated_commands += u64::from(command.saturation.any());

@@ -5,7 +5,7 @@ mod common;
 
 use common::{connect, link_settings, rig, wait_until, RigOptions, TIMEOUT};
 use limb_kernel::config::{Interval, SafetyLimits};
-use limb_kernel::kernel::RefusalReason;
+use limb_kernel::RefusalReason;
 use limb_kernel::{KernelConfig, StateKind};
 use limb_verification::scenario::TARGET;
 use limb_zenoh::auth::CommandKey;

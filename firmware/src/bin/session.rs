@@ -22,10 +22,10 @@ use cortex_m_rt::{entry, exception, ExceptionFrame};
 use cortex_m_semihosting::{debug, hprintln};
 use limb_firmware::{count, stack};
 use limb_kernel::trace::TraceEvent;
-use limb_kernel::{Command, Kernel, KernelConfig, PathSample, StateKind};
+use limb_kernel::{Command, Kernel, KernelConfig, StateKind};
 use limb_sim::operator::SessionPlan;
 use limb_sim::session::{self, Digest, EventLine, Observer};
-use limb_sim::{Plant, PlantParameters};
+use limb_sim::{Measurement, Plant, PlantParameters};
 
 /// The firmware has no heap: every allocation fails, and a failed
 /// allocation ends the run with failure. The plant crate links `alloc` for
@@ -97,12 +97,12 @@ impl Meter {
 
 impl Observer<Plant> for Meter {
     #[inline(always)]
-    fn before_step(&mut self, _: &Plant, _: &PathSample, _: StateKind) {
+    fn before_step(&mut self, _: &Plant, _: &Measurement, _: StateKind) {
         self.started = count::now();
     }
 
     #[inline(always)]
-    fn after_step(&mut self, _: &Plant, _: &PathSample, state: StateKind, command: &Command) {
+    fn after_step(&mut self, _: &Plant, _: &Measurement, state: StateKind, command: &Command) {
         let ticks = count::now() - self.started;
         let instructions = self.instructions(ticks);
         let concluding = state == StateKind::Estimate && command.state == StateKind::Validated;
