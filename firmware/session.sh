@@ -30,7 +30,7 @@ fi
 
 status=0
 timeout 1200 qemu-system-arm -M mps2-an500 -cpu cortex-m7 -nographic -monitor none -serial none \
-  -icount shift=0 -semihosting-config enable=on,target=native -kernel "$elf" >"$out/target.txt" || status=$?
+  -icount shift=0 -semihosting-config enable=on,target=native -kernel "$elf" </dev/null >"$out/target.txt" || status=$?
 cat "$out/target.txt"
 ../target/$profile/limb run --digest >"$out/host.txt"
 grep -E '^(event|model|steps|command-hash) ' "$out/target.txt" >"$out/target-digest.txt" || true
