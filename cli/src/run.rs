@@ -13,35 +13,35 @@
 //!
 //! Time: the kernel runs at `--rate` (1 kHz, the FRI rate, by default); the
 //! plant integrates at its own 0.5 ms step in between.
+//!
+//! The loop itself is [`limb_sim::session::run`], the same `no_std` code
+//! the firmware runs on a Cortex-M7; this runner observes it (step wall
+//! time, joint extremes, the `--log` rows, the events). `--digest` prints
+//! the session in the canonical text the firmware prints, for comparing
+//! the two.
 
 use crate::error::{emit, print_json, CliError};
 use limb_kernel::geometry::Point;
 use limb_kernel::motion::SetPoint;
-use limb_kernel::trace::{Cause, Event};
-use limb_kernel::{Kernel, KernelConfig, PathSample, Request, StateKind};
+use limb_kernel::trace::{Cause, Event, TraceEvent};
+use limb_kernel::{Command, Kernel, KernelConfig, StateKind};
 use limb_sim::log::Record;
 pub use limb_sim::operator::SessionPlan;
-use limb_sim::operator::{completes_session, describe, FittedModel, Operator};
+use limb_sim::operator::{describe, FittedModel};
+use limb_sim::session::{self, Digest, EventLine, Observer};
 use limb_sim::Measurement;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::time::Instant;
 
-/// A plant the kernel can close the loop on.
-pub trait ClosedLoopPlant {
-    /// Plant time [s].
-    fn time(&self) -> f64;
-    /// What a robot measures now: time stamp, grasp pose, wrench (frame S).
-    fn measure(&mut self) -> Measurement;
+/// A plant the kernel can close the loop on, with its ground truth.
+pub trait ClosedLoopPlant: session::ClosedLoopPlant {
     /// The person's true joint angles now, exact [rad]: shoulder elevation
     /// q1, elbow flexion q2.
     fn joints(&self) -> [f64; 2];
     /// Ground truth as the log records it (potentiometer-rounded joints,
     /// elbow and shoulder, frame S).
     fn logged_truth(&self) -> limb_sim::Truth;
-    /// Advances the plant by `duration` seconds with the robot's impedance
-    /// following `set_point` (held when the kernel gives none).
-    fn advance(&mut self, set_point: Option<&SetPoint>, duration: f64);
     /// Ground truth: l1, l2 [m], elbow at t = 0 and shoulder [m], frame S.
     fn truth(&self) -> Truth;
 }
@@ -136,6 +136,72 @@ pub struct SessionReport {
     /// Every step's measurement, command and truth, for `--log`.
     #[serde(skip)]
     pub log: Vec<Record>,
+    /// FNV-1a hash of every command issued, hex (`limb_sim::session::CommandHash`).
+    pub command_hash: String,
+    /// The session in the canonical text of `--digest`.
+    #[serde(skip)]
+    pub digest: String,
+}
+
+/// What `limb run` records of the session as it runs.
+#[derive(Default)]
+struct Recorder {
+    events: Vec<Line>,
+    monitor_events: Vec<Line>,
+    digest: String,
+    started: Option<Instant>,
+    durations: Vec<(f64, StateKind)>,
+    joint_extremes: BTreeMap<String, JointExtremes>,
+    log: Vec<Record>,
+}
+
+impl<P: ClosedLoopPlant + ?Sized> Observer<P> for Recorder {
+    fn before_step(&mut self, _: &P, _: &Measurement, _: StateKind) {
+        self.started = Some(Instant::now());
+    }
+
+    fn after_step(
+        &mut self,
+        plant: &P,
+        measurement: &Measurement,
+        state: StateKind,
+        command: &Command,
+    ) {
+        let elapsed = self.started.map_or(0.0, |s| s.elapsed().as_secs_f64());
+        self.durations.push((elapsed, state));
+        let [q1, q2] = plant.joints();
+        let extremes = self
+            .joint_extremes
+            .entry(format!("{state:?}").to_lowercase())
+            .or_default();
+        extremes.max_hyperextension = extremes.max_hyperextension.max(-q2);
+        extremes.max_shoulder_elevation = extremes.max_shoulder_elevation.max(q1);
+        self.log.push(Record {
+            time: measurement.time,
+            command: command.set_point.map(|s| s.pose),
+            pose: measurement.pose,
+            lateral: Some(measurement.lateral),
+            wrench: measurement.wrench,
+            truth: Some(plant.logged_truth()),
+        });
+    }
+
+    fn event(&mut self, event: &TraceEvent) {
+        use std::fmt::Write;
+        let line = Line {
+            time: event.time,
+            what: describe(event),
+        };
+        if let Event::Transition {
+            cause: Cause::Stop(limb_kernel::StopReason::Monitor(_)),
+            ..
+        } = event.event
+        {
+            self.monitor_events.push(line.clone());
+        }
+        self.events.push(line);
+        let _ = writeln!(self.digest, "{}", EventLine(event));
+    }
 }
 
 /// Runs one session of `kernel` on `plant` following `plan`.
@@ -144,85 +210,26 @@ pub fn run_session(
     plant: &mut dyn ClosedLoopPlant,
     plan: &SessionPlan,
 ) -> SessionReport {
-    let period = 1.0 / plan.rate;
-    let mut report = SessionReport {
-        events: Vec::new(),
-        monitor_events: Vec::new(),
-        truth: plant.truth(),
-        model: None,
-        final_state: StateKind::Grasp,
-        completed: false,
-        saturated_commands: 0,
-        steps: 0,
-        step_time: StepTime::default(),
-        joint_extremes: BTreeMap::new(),
-        log: Vec::new(),
-    };
-    let mut durations: Vec<(f64, StateKind)> = Vec::new();
-    let mut operator = Operator::new(*plan);
-    while plant.time() < plan.timeout {
-        let measurement = plant.measure();
-        let frame = PathSample {
-            time: measurement.time,
-            pose: measurement.pose,
-            wrench: measurement.wrench,
-        };
-        let now = frame.time;
-        let request = operator.request(kernel.state().kind(), now);
-        if let Some(request) = request {
-            if matches!(request, Request::ApproveManipulation(_)) {
-                report.model = kernel
-                    .state()
-                    .arm()
-                    .map(|arm| model_report(arm, &report.truth));
-            }
-            let _ = kernel.request(request, now);
-        }
-        let state = kernel.state().kind();
-        let started = Instant::now();
-        let command = kernel.step(&frame, now);
-        durations.push((started.elapsed().as_secs_f64(), state));
-        let [q1, q2] = plant.joints();
-        let extremes = report
-            .joint_extremes
-            .entry(format!("{state:?}").to_lowercase())
-            .or_default();
-        extremes.max_hyperextension = extremes.max_hyperextension.max(-q2);
-        extremes.max_shoulder_elevation = extremes.max_shoulder_elevation.max(q1);
-        report.log.push(Record {
-            time: measurement.time,
-            command: command.set_point.map(|s| s.pose),
-            pose: measurement.pose,
-            lateral: Some(measurement.lateral),
-            wrench: measurement.wrench,
-            truth: Some(plant.logged_truth()),
-        });
-        report.steps += 1;
-        report.saturated_commands += u64::from(command.saturation.any());
-        while let Some(event) = kernel.pop_event() {
-            let line = Line {
-                time: event.time,
-                what: describe(&event),
-            };
-            if let Event::Transition {
-                cause: Cause::Stop(limb_kernel::StopReason::Monitor(_)),
-                ..
-            } = event.event
-            {
-                report.monitor_events.push(line.clone());
-            }
-            report.completed |= completes_session(&event);
-            report.events.push(line);
-        }
-        operator.observe(command);
-        if report.completed || command.state == StateKind::SafeStop {
-            break;
-        }
-        plant.advance(command.set_point.as_ref(), period);
+    let truth = plant.truth();
+    let mut recorder = Recorder::default();
+    let outcome = session::run(kernel, plant, plan, &mut recorder);
+    let mut digest = recorder.digest;
+    digest.push_str(&Digest(&outcome).to_string());
+    SessionReport {
+        events: recorder.events,
+        monitor_events: recorder.monitor_events,
+        truth,
+        model: outcome.model.map(|m| model_report(&m, &truth)),
+        final_state: outcome.final_state,
+        completed: outcome.completed,
+        saturated_commands: outcome.saturated_commands,
+        steps: outcome.steps,
+        step_time: step_time(&mut recorder.durations),
+        joint_extremes: recorder.joint_extremes,
+        log: recorder.log,
+        command_hash: format!("{:016x}", outcome.command_hash),
+        digest,
     }
-    report.final_state = kernel.state().kind();
-    report.step_time = step_time(&mut durations);
-    report
 }
 
 /// Median, 99.9th percentile and maximum of the step `durations`, with the
@@ -244,8 +251,7 @@ fn step_time(durations: &mut [(f64, StateKind)]) -> StepTime {
     }
 }
 
-fn model_report(arm: &limb_kernel::validate::ValidatedArm, truth: &Truth) -> ModelReport {
-    let model = FittedModel::of(arm);
+fn model_report(model: &FittedModel, truth: &Truth) -> ModelReport {
     ModelReport {
         l1: model.upper_arm_length,
         l2: model.forearm_length,
@@ -322,7 +328,7 @@ pub fn human(report: &SessionReport, header: &str) -> String {
 /// The reference plant of `limb-sim` behind [`ClosedLoopPlant`].
 pub struct ReferencePlant(pub limb_sim::Plant);
 
-impl ClosedLoopPlant for ReferencePlant {
+impl session::ClosedLoopPlant for ReferencePlant {
     fn time(&self) -> f64 {
         self.0.time()
     }
@@ -331,16 +337,18 @@ impl ClosedLoopPlant for ReferencePlant {
         self.0.measure()
     }
 
+    fn advance(&mut self, set_point: Option<&SetPoint>, duration: f64) {
+        limb_sim::closed_loop::advance(&mut self.0, set_point, duration);
+    }
+}
+
+impl ClosedLoopPlant for ReferencePlant {
     fn joints(&self) -> [f64; 2] {
         self.0.state().0
     }
 
     fn logged_truth(&self) -> limb_sim::Truth {
         self.0.truth()
-    }
-
-    fn advance(&mut self, set_point: Option<&SetPoint>, duration: f64) {
-        limb_sim::closed_loop::advance(&mut self.0, set_point, duration);
     }
 
     fn truth(&self) -> Truth {
@@ -403,6 +411,10 @@ pub struct RunArgs {
     /// set-point and the plant's truth) to this CSV in the plant.md format.
     #[arg(long)]
     pub log: Option<std::path::PathBuf>,
+    /// Print only the session's canonical digest (events, exact model,
+    /// command hash): the text the firmware prints on the target.
+    #[arg(long, conflicts_with = "json")]
+    pub digest: bool,
 }
 
 /// The kernel configuration for `args`, checked.
@@ -421,6 +433,8 @@ pub fn config(args: &RunArgs) -> Result<KernelConfig, CliError> {
 pub fn output(report: &SessionReport, args: &RunArgs, header: &str) -> Result<(), CliError> {
     if args.json {
         print_json(report)
+    } else if args.digest {
+        emit(&format!("{}\n", report.digest))
     } else {
         emit(&human(report, header))
     }

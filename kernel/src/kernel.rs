@@ -73,8 +73,31 @@ impl Kernel {
     /// The configuration's first unusable value.
     pub fn new(config: KernelConfig) -> Result<Self, ConfigError> {
         config.check()?;
+        Ok(Self::fresh(config))
+    }
+
+    /// [`Kernel::new`] built in place in `slot` (a `static` on a target, a
+    /// heap allocation on a host), for callers that must not hold a
+    /// `size_of::<Kernel>()` value (about 230 kB, the path buffer) on their
+    /// stack. The path buffer is left uninitialised (it is empty), so the
+    /// kernel is written field by field into `slot` and never moved.
+    ///
+    /// # Errors
+    /// The configuration's first unusable value; `slot` is then untouched.
+    pub fn new_in(
+        slot: &mut core::mem::MaybeUninit<Self>,
+        config: KernelConfig,
+    ) -> Result<&mut Self, ConfigError> {
+        config.check()?;
+        Ok(slot.write(Self::fresh(config)))
+    }
+
+    /// A kernel in Grasp with the checked `config`. Always inlined, so that
+    /// [`Kernel::new_in`] writes it straight into its slot.
+    #[inline(always)]
+    fn fresh(config: KernelConfig) -> Self {
         let l = &config.limits;
-        Ok(Self {
+        Self {
             law: ImpedanceLaw::new(&config.impedance, l.max_force, l.max_torque, l.max_speed),
             rates: RateWindow::new(l.rate_window),
             config,
@@ -83,7 +106,7 @@ impl Kernel {
             last_frame: None,
             last_now: None,
             trace: Trace::default(),
-        })
+        }
     }
 
     /// The configuration.

@@ -27,7 +27,8 @@
 //! online estimator and its bounded refinement),
 //! [`validate`] (the only maker of [`validate::ValidatedArm`]), [`state`]
 //! (typed states and transitions), [`monitor`], [`impedance`], [`command`],
-//! [`trace`], [`config`], and [`kernel`] (the runtime wrapper).
+//! [`trace`], [`config`], [`linear`] (small linear systems, no panic
+//! path), and [`kernel`] (the runtime wrapper).
 //!
 //! # Verification beside the code
 //! Each module that carries a safety requirement ends in a
@@ -70,6 +71,7 @@ mod kani_inputs;
 mod kani_stubs;
 pub mod kernel;
 pub mod lift;
+pub mod linear;
 pub mod monitor;
 pub mod motion;
 pub mod path;

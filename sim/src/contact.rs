@@ -72,7 +72,7 @@ pub fn solve(set: ActiveSet, mass: &Mat2, rhs: Vec2) -> Option<(Vec2, Vec2)> {
     match (set.elbow, set.forearm) {
         (false, false) => {
             let det = m11 * m22 - m12 * m21;
-            (det.abs() > 0.0).then(|| {
+            (libm::fabs(det) > 0.0).then(|| {
                 (
                     [
                         (m22 * rhs[0] - m12 * rhs[1]) / det,
@@ -84,7 +84,7 @@ pub fn solve(set: ActiveSet, mass: &Mat2, rhs: Vec2) -> Option<(Vec2, Vec2)> {
         }
         (true, false) => {
             // q̈1 = 0: row 2 gives q̈2, row 1 the force.
-            (m22.abs() > 0.0).then(|| {
+            (libm::fabs(m22) > 0.0).then(|| {
                 let a2 = rhs[1] / m22;
                 ([0.0, a2], [m12 * a2 - rhs[0], 0.0])
             })
@@ -92,7 +92,7 @@ pub fn solve(set: ActiveSet, mass: &Mat2, rhs: Vec2) -> Option<(Vec2, Vec2)> {
         (false, true) => {
             // q̈2 = −q̈1, λ acts on both rows.
             let k = m11 - m12 - m21 + m22;
-            (k.abs() > 0.0).then(|| {
+            (libm::fabs(k) > 0.0).then(|| {
                 let a = (rhs[0] - rhs[1]) / k;
                 ([a, -a], [0.0, (m21 - m22) * a - rhs[1]])
             })
@@ -115,11 +115,11 @@ pub fn admissible(set: ActiveSet, bound: ActiveSet, qdd: Vec2, lambda: Vec2) -> 
 pub fn clamp(q: &mut Vec2, qd: &mut Vec2) {
     if q[0] < 0.0 {
         q[0] = 0.0;
-        qd[0] = qd[0].max(0.0);
+        qd[0] = libm::fmax(qd[0], 0.0);
     }
     if q[0] + q[1] < 0.0 {
         q[1] = -q[0];
-        let psid = (qd[0] + qd[1]).max(0.0);
+        let psid = libm::fmax(qd[0] + qd[1], 0.0);
         qd[1] = psid - qd[0];
     }
 }

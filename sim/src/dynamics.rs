@@ -40,9 +40,9 @@ pub fn arm_terms(a: &ArmParameters, q: Vec2, qd: Vec2) -> ArmTerms {
     let (c1, c2) = (l1 / 2.0, l2 / 2.0);
     let (i1, i2) = (m1 * l1 * l1 / 12.0, m2 * l2 * l2 / 12.0);
     let psi = q[0] + q[1];
-    let (s1, co1) = q[0].sin_cos();
-    let (sp, cp) = psi.sin_cos();
-    let (s2, co2) = q[1].sin_cos();
+    let (s1, co1) = (libm::sin(q[0]), libm::cos(q[0]));
+    let (sp, cp) = (libm::sin(psi), libm::cos(psi));
+    let (s2, co2) = (libm::sin(q[1]), libm::cos(q[1]));
     let m11 = i1 + m1 * c1 * c1 + i2 + m2 * (l1 * l1 + c2 * c2 + 2.0 * l1 * c2 * co2);
     let m12 = i2 + m2 * (c2 * c2 + l1 * c2 * co2);
     let m22 = i2 + m2 * c2 * c2;

@@ -12,20 +12,34 @@
 //! unilateral constraints), [`plant`] (state, step, measurement),
 //! [`noise`] (the seeded Gaussian generator), [`operator`] (the requests a
 //! person makes of the kernel in a closed-loop session), [`scripted`] (the estimation
-//! run), [`log`] (the CSV log format: writer and the strict reader).
+//! run), [`log`] (the CSV log format: writer and the strict reader; with
+//! the `std` feature), [`session`] (one whole closed-loop kernel session,
+//! shared by `limb run` and the firmware).
+//!
+//! # Targets
+//! Without its default `std` feature the crate is `no_std` (it needs
+//! `alloc` only for error texts, effect parsing and the latency buffer;
+//! a nominal session allocates nothing): the firmware runs the same plant
+//! on a Cortex-M7. All transcendental functions come from `libm` on every
+//! target, so host and target compute the same bits.
 
+#![cfg_attr(not(feature = "std"), no_std)]
 #![forbid(unsafe_code)]
+
+extern crate alloc;
 
 pub mod closed_loop;
 pub mod contact;
 pub mod dynamics;
 pub mod effects;
+#[cfg(feature = "std")]
 pub mod log;
 pub mod noise;
 pub mod operator;
 pub mod params;
 pub mod plant;
 pub mod scripted;
+pub mod session;
 
 pub use effects::{Effect, EffectError, Effects};
 pub use params::{ArmParameters, PlantParameters, RobotParameters, BENCHMARK_ARMS};

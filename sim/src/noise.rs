@@ -40,10 +40,10 @@ impl Gaussian {
             Some(z) => z,
             None => {
                 let (u1, u2) = (self.uniform(), self.uniform());
-                let r = (-2.0 * u1.ln()).sqrt();
-                let angle = 2.0 * std::f64::consts::PI * u2;
-                self.spare = Some(r * angle.sin());
-                r * angle.cos()
+                let r = libm::sqrt(-2.0 * libm::log(u1));
+                let angle = 2.0 * core::f64::consts::PI * u2;
+                self.spare = Some(r * libm::sin(angle));
+                r * libm::cos(angle)
             }
         };
         sigma * unit

@@ -10,6 +10,8 @@
 //! step's command (the stillness test needs it). [`describe`] puts a trace
 //! event into words; [`FittedModel`] is the validated arm in numbers.
 
+use alloc::string::{String, ToString};
+use core::fmt;
 use limb_kernel::arm::JointAngles;
 use limb_kernel::geometry::Point;
 use limb_kernel::trace::{Cause, Event, TraceEvent};
@@ -134,21 +136,35 @@ impl Operator {
 
 /// A trace event in words.
 pub fn describe(event: &TraceEvent) -> String {
-    match event.event {
-        Event::Transition { from, to, cause } => {
-            let why = match cause {
-                Cause::Request(request) => format!("request {request:?}"),
-                Cause::ModelValidated => "model validated".into(),
-                Cause::Stop(reason) => format!("stop: {reason:?}"),
-            };
-            format!("{from:?} → {to:?} ({why})")
-        }
-        Event::Refused(refusal) => format!(
-            "refused {:?} in {:?}: {:?}",
-            refusal.request, refusal.state, refusal.reason
-        ),
-        Event::LiftEnded(reason) => {
-            format!("lift ended: {reason:?}; holding while the estimate is refined")
+    Described(event).to_string()
+}
+
+/// A trace event in words, written without allocating (the firmware
+/// prints it; [`describe`] collects it).
+#[derive(Clone, Copy, Debug)]
+pub struct Described<'a>(pub &'a TraceEvent);
+
+impl fmt::Display for Described<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.0.event {
+            Event::Transition { from, to, cause } => {
+                write!(f, "{from:?} → {to:?} (")?;
+                match cause {
+                    Cause::Request(request) => write!(f, "request {request:?}")?,
+                    Cause::ModelValidated => f.write_str("model validated")?,
+                    Cause::Stop(reason) => write!(f, "stop: {reason:?}")?,
+                }
+                f.write_str(")")
+            }
+            Event::Refused(refusal) => write!(
+                f,
+                "refused {:?} in {:?}: {:?}",
+                refusal.request, refusal.state, refusal.reason
+            ),
+            Event::LiftEnded(reason) => write!(
+                f,
+                "lift ended: {reason:?}; holding while the estimate is refined"
+            ),
         }
     }
 }

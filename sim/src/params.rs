@@ -1,5 +1,8 @@
 //! Parameters of the reference plant, with the defaults of `plant.md`.
 
+use alloc::format;
+use alloc::string::String;
+
 /// The six benchmark arms of `plant.md` (the paper's Table 1): (l1, l2) [m],
 /// case 1 first.
 pub const BENCHMARK_ARMS: [(f64, f64); 6] = [
@@ -65,7 +68,7 @@ impl RobotParameters {
     pub fn damping(&self) -> [f64; 3] {
         let mut d = [0.0; 3];
         for (i, di) in d.iter_mut().enumerate() {
-            *di = 2.0 * self.damping_ratio * (self.stiffness[i] * self.inertia[i]).sqrt();
+            *di = 2.0 * self.damping_ratio * libm::sqrt(self.stiffness[i] * self.inertia[i]);
         }
         d
     }

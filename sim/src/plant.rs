@@ -27,9 +27,10 @@ use crate::dynamics::{apply, apply_transpose, arm_terms, Vec2};
 use crate::effects::Effects;
 use crate::noise::Gaussian;
 use crate::params::PlantParameters;
+use alloc::collections::VecDeque;
+use alloc::string::String;
 use limb_kernel::geometry::{Point, Pose, Wrench};
 use limb_kernel::motion::SetPoint;
-use std::collections::VecDeque;
 
 /// Integration step [s] (0.5 ms).
 pub const STEP: f64 = 0.0005;
@@ -277,7 +278,7 @@ impl Plant {
         }
         let mut lateral = 0.0;
         if let Some(tilt) = self.effects.plane_tilt {
-            let (sin, cos) = tilt.angle.sin_cos();
+            let (sin, cos) = (libm::sin(tilt.angle), libm::cos(tilt.angle));
             lateral = pose[1] * sin;
             pose[1] *= cos;
         }
@@ -378,12 +379,12 @@ impl Plant {
         let a = &self.params.arm;
         let (l1, l2) = (a.upper_arm_length, a.forearm_length);
         let shoulder = Point::new(l1 + l2 + self.shoulder_offset[0], self.shoulder_offset[1]);
-        let round = |v: f64| (v / POTENTIOMETER_RESOLUTION).round() * POTENTIOMETER_RESOLUTION;
+        let round = |v: f64| libm::round(v / POTENTIOMETER_RESOLUTION) * POTENTIOMETER_RESOLUTION;
         Truth {
             q: [round(self.q[0]), round(self.q[1])],
             elbow: Point::new(
-                shoulder.x - l1 * self.q[0].cos(),
-                shoulder.z + l1 * self.q[0].sin(),
+                shoulder.x - l1 * libm::cos(self.q[0]),
+                shoulder.z + l1 * libm::sin(self.q[0]),
             ),
             shoulder,
         }

@@ -4,6 +4,9 @@
 //! that step's integration, until the lift and its hold are over.
 
 use crate::plant::{Measurement, Plant, Truth, STEP};
+use alloc::format;
+use alloc::string::String;
+use alloc::vec::Vec;
 use limb_kernel::geometry::Pose;
 use limb_kernel::motion::{EstimationMotion, EstimationMotionParameters, SetPoint};
 
@@ -29,7 +32,7 @@ pub struct Row {
 pub fn estimation_run(plant: &mut Plant) -> Result<Vec<Row>, String> {
     let motion = EstimationMotion::new(Pose::default(), &EstimationMotionParameters::default())
         .map_err(|e| format!("estimation motion: {e:?}"))?;
-    let steps = (motion.total_duration() / STEP).round() as u64;
+    let steps = libm::round(motion.total_duration() / STEP) as u64;
     let mut rows = Vec::with_capacity((steps / LOG_EVERY + 1) as usize);
     for k in 0..=steps {
         let t = k as f64 * STEP;

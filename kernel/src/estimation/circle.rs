@@ -178,7 +178,8 @@ pub fn fit_circle_kasa<I: Iterator<Item = Point> + Clone>(
         1.0,
     );
     let rhs = Vector3::new(2.0 * m.xw, 2.0 * m.zw, m.xx + m.zz);
-    let solution = normal.lu().solve(&rhs).ok_or(CircleFitError::Degenerate)?;
+    let solution = crate::linear::solve(normal.transpose().into(), rhs.into())
+        .ok_or(CircleFitError::Degenerate)?;
     let (a, b, c) = (solution[0], solution[1], solution[2]);
     circle_from_centred(&m, a, b, c + a * a + b * b)
 }

@@ -207,9 +207,7 @@ fn solve_forearm_pose<I: Iterator<Item = FitPoint>>(
             rhs[index] = value;
         }
     }
-    let theta = normal
-        .lu()
-        .solve(&rhs)
+    let theta = crate::linear::solve(normal.transpose().into(), rhs.into())
         .ok_or(EstimateError::ForearmFit(CircleFitError::Degenerate))?;
     if !theta.iter().all(|v| v.is_finite()) {
         return Err(EstimateError::ForearmFit(CircleFitError::NonFinite));

@@ -21,6 +21,6 @@ pub struct ActiveTorque {
 impl ActiveTorque {
     /// Elbow torque at time `t` [s] (N m).
     pub fn torque(&self, t: f64) -> f64 {
-        self.amp * (2.0 * std::f64::consts::PI * self.freq * t).sin()
+        self.amp * libm::sin(2.0 * core::f64::consts::PI * self.freq * t)
     }
 }

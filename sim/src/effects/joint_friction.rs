@@ -34,6 +34,6 @@ pub struct JointFriction {
 impl JointFriction {
     /// Friction torques at the two joints for joint speeds q̇ [N m].
     pub fn torques(&self, qd: [f64; 2]) -> [f64; 2] {
-        qd.map(|v| -self.coulomb * (v / SMOOTHING).tanh() - self.viscous * v)
+        qd.map(|v| -self.coulomb * libm::tanh(v / SMOOTHING) - self.viscous * v)
     }
 }

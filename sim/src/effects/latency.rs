@@ -27,6 +27,6 @@ pub struct Latency {
 impl Latency {
     /// The delay in whole integration steps.
     pub fn steps(&self) -> usize {
-        (self.delay / STEP).round() as usize
+        libm::round(self.delay / STEP) as usize
     }
 }

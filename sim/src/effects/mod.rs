@@ -18,6 +18,10 @@
 //!
 //! With no effect the plant is bit-identical to the nominal one.
 
+use alloc::string::{String, ToString};
+use alloc::vec;
+use alloc::vec::Vec;
+
 pub mod active_torque;
 pub mod backlash;
 pub mod grasp_compliance;

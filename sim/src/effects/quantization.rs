@@ -23,7 +23,7 @@ pub struct Quantization {
 /// `value` rounded to a multiple of `step` (unchanged for a zero step).
 fn round_to(value: f64, step: f64) -> f64 {
     if step > 0.0 {
-        (value / step).round() * step
+        libm::round(value / step) * step
     } else {
         value
     }

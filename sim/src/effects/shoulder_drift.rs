@@ -43,7 +43,7 @@ pub struct ShoulderDrift {
 impl ShoulderDrift {
     /// Critical damping of the trunk, 2·sqrt(k·m) [N s/m].
     pub fn damping(&self) -> f64 {
-        2.0 * (self.k * TRUNK_MASS).sqrt()
+        2.0 * libm::sqrt(self.k * TRUNK_MASS)
     }
 
     /// Static shoulder displacement [m] under robot force `force` (x, z)
