@@ -11,8 +11,8 @@
 
 use crate::error::{print_json, CliError};
 use clap::{Args, Subcommand, ValueEnum};
-use limb_kernel::arm::JointAngles;
 use limb_zenoh::auth::CommandKey;
+use limb_zenoh::kernel_wire::Joints;
 use limb_zenoh::link::{LinkSettings, LivenessPolicy, OnSupervisorLoss};
 use limb_zenoh::node::{LoopSettings, Node};
 use limb_zenoh::sensor::ScriptedLift;
@@ -59,7 +59,7 @@ enum Policy {
 /// Where and as whom.
 #[derive(Args)]
 struct Peer {
-    /// Robot id (key prefix `limb/<robot>/@v1`).
+    /// Robot id (key prefix `limb/<robot>/@v2`).
     #[arg(long)]
     robot: String,
     /// Endpoints to connect to, e.g. tcp/127.0.0.1:7447.
@@ -221,7 +221,7 @@ pub fn run(args: ZenohArgs) -> Result<(), CliError> {
                     shoulder_elevation,
                     elbow_flexion,
                 } => SupervisorCommand::ApproveManipulation {
-                    target: JointAngles {
+                    target: Joints {
                         shoulder_elevation,
                         elbow_flexion,
                     },

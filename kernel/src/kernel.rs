@@ -110,6 +110,19 @@ pub enum RefusalReason {
     Plan(crate::motion::PlanError),
 }
 
+impl RefusalReason {
+    /// Stable numeric code of the reason.
+    pub const fn code(&self) -> u16 {
+        match self {
+            RefusalReason::NotAllowedInState => 1,
+            RefusalReason::NoFreshMeasurement => 2,
+            RefusalReason::InvalidTime => 3,
+            RefusalReason::Target(_) => 4,
+            RefusalReason::Plan(_) => 5,
+        }
+    }
+}
+
 /// Why new safety limits were refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
