@@ -313,6 +313,7 @@ fn stream(device: &Path, seconds: f64, alpha: f64, backlash_deg: f64) -> Result<
         "frames": frames,
         "checksum_errors": stats.checksum_errors,
         "discarded_bytes": stats.discarded,
+        "unparsed_frames": session.unparsed_frames(),
         "last_angles_deg": last_angles.map(|a| [a.flexion.to_degrees(), a.abduction.to_degrees()]),
     });
     match session.state() {

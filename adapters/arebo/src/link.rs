@@ -134,6 +134,8 @@ pub struct Session {
     last_heartbeat: Option<f64>,
     limits: SafetyLimits,
     state: SessionState,
+    /// Frames with a valid checksum whose payload is not a stream frame.
+    unparsed: u32,
 }
 
 impl Session {
@@ -153,6 +155,7 @@ impl Session {
             last_heartbeat: None,
             limits,
             state: SessionState::Running,
+            unparsed: 0,
         };
         session.send(Command::StartStream)?;
         Ok(session)
@@ -171,6 +174,12 @@ impl Session {
     /// Decoder counters (frames, checksum errors, discarded bytes).
     pub fn stats(&self) -> crate::protocol::DecoderStats {
         self.decoder.stats
+    }
+
+    /// Frames with a valid checksum that were not a 53-byte stream frame
+    /// (dropped, counted here).
+    pub fn unparsed_frames(&self) -> u32 {
+        self.unparsed
     }
 
     /// Sends a command. A write that fails latches the safe stop (and tries
@@ -243,7 +252,8 @@ impl Session {
             let _ = self.send(Command::Heartbeat);
             self.last_heartbeat = Some(now);
         }
-        let mut bytes = [0u8; 512];
+        // Large enough to drain a backlog quickly (a frame is 57 bytes).
+        let mut bytes = [0u8; 4096];
         let mut frames = Vec::new();
         let read = match self.port.read(&mut bytes) {
             Err(e) if e.kind() == ErrorKind::TimedOut => Ok(0),
@@ -253,13 +263,15 @@ impl Session {
         match read {
             Ok(n) => {
                 for byte in bytes.iter().take(n) {
-                    if let Some(telemetry) =
-                        self.decoder.push(*byte).and_then(|p| Telemetry::parse(&p))
-                    {
-                        frames.push(Received {
+                    let Some(payload) = self.decoder.push(*byte) else {
+                        continue;
+                    };
+                    match Telemetry::parse(&payload) {
+                        Some(telemetry) => frames.push(Received {
                             telemetry,
                             time: now,
-                        });
+                        }),
+                        None => self.unparsed = self.unparsed.saturating_add(1),
                     }
                 }
             }
@@ -331,6 +343,9 @@ pub struct DeviceRecord {
 /// A trajectory the device's SJM follows (simulated time [s]).
 pub type DeviceTrajectory = Box<dyn Fn(f64) -> (ShoulderAngles, [f64; 2]) + Send>;
 
+/// Longest the simulated device waits to write a frame into a full pty.
+const DEVICE_WRITE_TIMEOUT: Duration = Duration::from_secs(30);
+
 /// Runs the simulated AREBO on `device` until it has streamed `frames`
 /// frames (or spent 2 × `frames` periods), one period of `wall_period`
 /// real time per frame; each streamed frame advances the simulation by
@@ -356,6 +371,9 @@ pub fn spawn_device(
     fault: FaultSwitch,
 ) -> Result<JoinHandle<DeviceRecord>, LinkError> {
     let mut writer = device.try_clone_native()?;
+    // A simulated device waits for a slow host rather than ending (a test
+    // machine under load must not turn into a device fault).
+    writer.set_timeout(DEVICE_WRITE_TIMEOUT)?;
     let (commands, received) = mpsc::channel();
     let mut reader = device;
     // A helper thread forwards commands; it ends when the port closes or

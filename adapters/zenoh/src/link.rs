@@ -13,8 +13,10 @@
 //!                                                               │
 //!             try_send, never blocks the loop: bounded queue (1024)
 //!                                                               ▼
-//!       publisher thread: events, acks, link (Block) · samples (Drop) ·
-//!       status (alive/kernel) · model/arm · snapshot for the queryables
+//!       publisher thread: events, acks, link (Block) · status
+//!       (alive/kernel) · model/arm · snapshot for the queryables
+//!       · samples (Drop), unless [`SampleQos::from_loop`] puts them
+//!       from the loop itself (express, Drop: the default)
 //! ```
 //! Zenoh callbacks do constant work and never wait: an emergency stop sets
 //! an atomic flag the loop reads at every step, so it reaches the kernel
@@ -70,6 +72,41 @@ pub struct LivenessPolicy {
     pub on_loss: OnSupervisorLoss,
 }
 
+/// How `telemetry/sample` is published (always best effort, congestion
+/// control Drop: a congested link loses samples, never delays the loop
+/// for long).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SampleQos {
+    /// Zenoh express: each sample is sent at once instead of being batched
+    /// with others.
+    pub express: bool,
+    /// Zenoh priority of the samples.
+    pub priority: Priority,
+    /// Put each sample from the control loop itself instead of handing it
+    /// to the publisher thread (one thread wake-up less). A put with
+    /// congestion control Drop does not wait for the network; on a full
+    /// transmit queue Zenoh waits at most its `wait_before_drop` (1 ms by
+    /// default) before dropping.
+    pub from_loop: bool,
+}
+
+impl SampleQos {
+    /// Before issue 18: batched, priority DataHigh, through the publisher
+    /// thread.
+    pub const BATCHED: Self = Self {
+        express: false,
+        priority: Priority::DataHigh,
+        from_loop: false,
+    };
+    /// Express, priority DataHigh, from the loop: the default (p99 latency
+    /// in the README's benchmark).
+    pub const LOW_LATENCY: Self = Self {
+        express: true,
+        priority: Priority::DataHigh,
+        from_loop: true,
+    };
+}
+
 /// Settings of the Zenoh side of a node.
 #[derive(Clone, Debug)]
 pub struct LinkSettings {
@@ -81,6 +118,8 @@ pub struct LinkSettings {
     pub command_key: CommandKey,
     /// Publish one sample every this many steps (1 = every step).
     pub sample_decimation: u32,
+    /// How samples are published.
+    pub sample_qos: SampleQos,
     /// Period of `alive/kernel` status messages [kernel s].
     pub status_period: f64,
     /// Supervisor watchdog.
@@ -171,6 +210,9 @@ enum Outbound {
 pub struct Supervision {
     shared: Arc<Shared>,
     commands: Receiver<CommandMessage>,
+    /// The sample publisher when samples are put from the loop
+    /// ([`SampleQos::from_loop`]).
+    samples: Option<(WireFormat, zenoh::pubsub::Publisher<'static>)>,
     /// Sequences of the emergency stops that arrived (`None`: unreadable
     /// payload), in arrival order.
     estops: Receiver<Option<u64>>,
@@ -238,7 +280,13 @@ impl Supervision {
                 frame: (*frame).into(),
                 command: (*command).into(),
             };
-            if self.outbound.try_send(Outbound::Sample(message)).is_err() {
+            let sent = match &self.samples {
+                Some((format, publisher)) => format
+                    .encode(&message)
+                    .is_ok_and(|bytes| publisher.put(bytes).wait().is_ok()),
+                None => self.outbound.try_send(Outbound::Sample(message)).is_ok(),
+            };
+            if !sent {
                 self.counters.samples_dropped += 1;
             }
         }
@@ -458,7 +506,20 @@ impl Link {
         let (estops_tx, estops) = sync_channel(ESTOP_QUEUE);
         let snapshot = Arc::new(Mutex::new(None::<StateSnapshot>));
 
-        let publishers = Publishers::declare(&session, &keys, format)?;
+        let qos = settings.sample_qos;
+        let sample_publisher = session
+            .declare_publisher(keys.sample())
+            .congestion_control(CongestionControl::Drop)
+            .priority(qos.priority)
+            .express(qos.express)
+            .encoding(format.encoding())
+            .wait()?;
+        let (thread_samples, loop_samples) = if qos.from_loop {
+            (None, Some((format, sample_publisher)))
+        } else {
+            (Some(sample_publisher), None)
+        };
+        let publishers = Publishers::declare(&session, &keys, format, thread_samples)?;
         let publisher = std::thread::Builder::new()
             .name("limb-zenoh-publish".into())
             .spawn({
@@ -483,6 +544,7 @@ impl Link {
         let supervision = Supervision {
             shared,
             commands,
+            samples: loop_samples,
             estops,
             outbound: outbound.clone(),
             sample_decimation: u64::from(settings.sample_decimation),
@@ -530,7 +592,8 @@ impl Link {
 struct Publishers {
     format: WireFormat,
     event: zenoh::pubsub::Publisher<'static>,
-    sample: zenoh::pubsub::Publisher<'static>,
+    /// `None` when the loop puts the samples itself.
+    sample: Option<zenoh::pubsub::Publisher<'static>>,
     link: zenoh::pubsub::Publisher<'static>,
     ack: zenoh::pubsub::Publisher<'static>,
     status: zenoh::pubsub::Publisher<'static>,
@@ -542,6 +605,7 @@ impl Publishers {
         session: &zenoh::Session,
         keys: &Keys,
         format: WireFormat,
+        sample: Option<zenoh::pubsub::Publisher<'static>>,
     ) -> Result<Self, AdapterError> {
         let declare = |key: String, congestion: CongestionControl, priority: Priority| {
             session
@@ -555,7 +619,7 @@ impl Publishers {
         Ok(Self {
             format,
             event: declare(keys.event(), Block, Priority::InteractiveHigh)?,
-            sample: declare(keys.sample(), Drop, Priority::DataHigh)?,
+            sample,
             link: declare(keys.link(), Block, Priority::InteractiveHigh)?,
             ack: declare(keys.ack(), Block, Priority::InteractiveHigh)?,
             status: declare(keys.kernel_alive(), Drop, Priority::Data)?,
@@ -574,7 +638,10 @@ impl Publishers {
             let result = match message {
                 Outbound::Close => return,
                 Outbound::Event(m) => self.put(&self.event, &m),
-                Outbound::Sample(m) => self.put(&self.sample, &m),
+                Outbound::Sample(m) => match &self.sample {
+                    Some(publisher) => self.put(publisher, &m),
+                    None => Ok(()),
+                },
                 Outbound::Link(m) => self.put(&self.link, &m),
                 Outbound::Ack(m) => self.put(&self.ack, &m),
                 Outbound::Status(status, arm) => {

@@ -2,7 +2,7 @@
 //! publishes its heartbeat, collects acks and queries the node.
 //!
 //! Used by the tests, the benchmark and the `limb` tool; a supervisor in
-//! another language follows [`crate::wire`] and [`crate::auth`].
+//! another language follows `PROTOCOL.md`.
 
 use crate::auth::CommandKey;
 use crate::error::AdapterError;
