@@ -186,7 +186,7 @@ pub fn run(args: ZenohArgs) -> Result<(), CliError> {
                 format: peer.format.into(),
                 command_key: read_key(&key_file)?,
                 sample_decimation: 1,
-                sample_qos: SampleQos::LOW_LATENCY,
+                sample_qos: SampleQos::BATCHED,
                 status_period: 0.1,
                 liveness: LivenessPolicy {
                     timeout: positive_duration(liveness_timeout, "--liveness-timeout")?,

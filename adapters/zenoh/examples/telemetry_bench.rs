@@ -1,5 +1,5 @@
 //! Telemetry at 1 kHz over loopback, side by side: for each sample QoS
-//! (batched through the publisher thread as before issue 18; express;
+//! (batched through the publisher thread, the default; express;
 //! express from the loop; express from the loop at priority RealTime) a
 //! node steps the kernel every 1 ms and publishes every sample, and a
 //! subscriber in another session measures the latency from the control
@@ -110,7 +110,7 @@ fn main() -> Result<(), AdapterError> {
     };
     let configurations = [
         (
-            "batched, DataHigh, publisher thread (before)",
+            "batched, DataHigh, publisher thread (default)",
             SampleQos::BATCHED,
         ),
         (
@@ -120,10 +120,7 @@ fn main() -> Result<(), AdapterError> {
                 ..SampleQos::BATCHED
             },
         ),
-        (
-            "express, DataHigh, from the loop (default)",
-            SampleQos::LOW_LATENCY,
-        ),
+        ("express, DataHigh, from the loop", SampleQos::LOW_LATENCY),
         (
             "express, RealTime, from the loop",
             SampleQos {

@@ -57,7 +57,7 @@ pub fn link_settings(options: &RigOptions) -> LinkSettings {
         format: options.format,
         command_key: key(),
         sample_decimation: 1,
-        sample_qos: SampleQos::LOW_LATENCY,
+        sample_qos: SampleQos::BATCHED,
         status_period: 0.05,
         liveness: LivenessPolicy {
             timeout: options.liveness_timeout,
