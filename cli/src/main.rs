@@ -9,6 +9,7 @@ mod diagnose_drive;
 mod error;
 mod estimate;
 mod kuka;
+mod population;
 mod run;
 mod simulate;
 mod zenoh;
@@ -32,6 +33,8 @@ struct Cli {
 enum Command {
     /// One whole kernel session on the reference plant (the embedded default, no robot).
     Run(run::RunArgs),
+    /// Kernel sessions on many random arms: joint limits during Estimate, model errors, refusals.
+    Population(population::PopulationArgs),
     /// Print the embedded default kernel configuration as JSON.
     Config,
     /// Fit the arm (l1, l2, elbow, shoulder) from an estimation-motion log.
@@ -107,6 +110,7 @@ fn main() {
     }
     let result: Result<(), CliError> = match cli.command {
         Command::Run(args) => run::run(&args),
+        Command::Population(args) => population::run(&args),
         Command::Config => config::run(),
         Command::Estimate { log, method, json } => estimate::run(&log, method, json),
         Command::Simulate(args) => match matches.subcommand_matches("simulate") {

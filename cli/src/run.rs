@@ -19,16 +19,26 @@ use limb_kernel::geometry::Point;
 use limb_kernel::motion::SetPoint;
 use limb_kernel::trace::{Cause, Event};
 use limb_kernel::{Kernel, KernelConfig, PathSample, Request, StateKind};
+use limb_sim::log::Record;
 pub use limb_sim::operator::SessionPlan;
 use limb_sim::operator::{completes_session, describe, FittedModel, Operator};
+use limb_sim::Measurement;
 use serde::Serialize;
+use std::collections::BTreeMap;
+use std::time::Instant;
 
 /// A plant the kernel can close the loop on.
 pub trait ClosedLoopPlant {
     /// Plant time [s].
     fn time(&self) -> f64;
     /// What a robot measures now: time stamp, grasp pose, wrench (frame S).
-    fn measure(&mut self) -> PathSample;
+    fn measure(&mut self) -> Measurement;
+    /// The person's true joint angles now, exact [rad]: shoulder elevation
+    /// q1, elbow flexion q2.
+    fn joints(&self) -> [f64; 2];
+    /// Ground truth as the log records it (potentiometer-rounded joints,
+    /// elbow and shoulder, frame S).
+    fn logged_truth(&self) -> limb_sim::Truth;
     /// Advances the plant by `duration` seconds with the robot's impedance
     /// following `set_point` (held when the kernel gives none).
     fn advance(&mut self, set_point: Option<&SetPoint>, duration: f64);
@@ -77,6 +87,29 @@ pub struct ModelReport {
     pub error_shoulder: f64,
 }
 
+/// Wall time of every `Kernel::step` of the session [s].
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct StepTime {
+    /// Median step.
+    pub median_s: f64,
+    /// 99.9th percentile.
+    pub p999_s: f64,
+    /// Slowest step.
+    pub max_s: f64,
+    /// The state the slowest step began in.
+    pub max_state: Option<StateKind>,
+}
+
+/// The person's joint extremes within one state, from the plant's true
+/// joints [rad].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct JointExtremes {
+    /// Largest elbow hyperextension, max(0, −q2).
+    pub max_hyperextension: f64,
+    /// Largest shoulder elevation q1.
+    pub max_shoulder_elevation: f64,
+}
+
 /// The whole session.
 #[derive(Clone, Debug, Serialize)]
 pub struct SessionReport {
@@ -96,6 +129,13 @@ pub struct SessionReport {
     pub saturated_commands: u64,
     /// Kernel steps taken.
     pub steps: u64,
+    /// Wall time of the kernel's steps.
+    pub step_time: StepTime,
+    /// Joint extremes per state (lower-case state name).
+    pub joint_extremes: BTreeMap<String, JointExtremes>,
+    /// Every step's measurement, command and truth, for `--log`.
+    #[serde(skip)]
+    pub log: Vec<Record>,
 }
 
 /// Runs one session of `kernel` on `plant` following `plan`.
@@ -114,10 +154,19 @@ pub fn run_session(
         completed: false,
         saturated_commands: 0,
         steps: 0,
+        step_time: StepTime::default(),
+        joint_extremes: BTreeMap::new(),
+        log: Vec::new(),
     };
+    let mut durations: Vec<(f64, StateKind)> = Vec::new();
     let mut operator = Operator::new(*plan);
     while plant.time() < plan.timeout {
-        let frame = plant.measure();
+        let measurement = plant.measure();
+        let frame = PathSample {
+            time: measurement.time,
+            pose: measurement.pose,
+            wrench: measurement.wrench,
+        };
         let now = frame.time;
         let request = operator.request(kernel.state().kind(), now);
         if let Some(request) = request {
@@ -129,7 +178,25 @@ pub fn run_session(
             }
             let _ = kernel.request(request, now);
         }
+        let state = kernel.state().kind();
+        let started = Instant::now();
         let command = kernel.step(&frame, now);
+        durations.push((started.elapsed().as_secs_f64(), state));
+        let [q1, q2] = plant.joints();
+        let extremes = report
+            .joint_extremes
+            .entry(format!("{state:?}").to_lowercase())
+            .or_default();
+        extremes.max_hyperextension = extremes.max_hyperextension.max(-q2);
+        extremes.max_shoulder_elevation = extremes.max_shoulder_elevation.max(q1);
+        report.log.push(Record {
+            time: measurement.time,
+            command: command.set_point.map(|s| s.pose),
+            pose: measurement.pose,
+            lateral: Some(measurement.lateral),
+            wrench: measurement.wrench,
+            truth: Some(plant.logged_truth()),
+        });
         report.steps += 1;
         report.saturated_commands += u64::from(command.saturation.any());
         while let Some(event) = kernel.pop_event() {
@@ -154,7 +221,27 @@ pub fn run_session(
         plant.advance(command.set_point.as_ref(), period);
     }
     report.final_state = kernel.state().kind();
+    report.step_time = step_time(&mut durations);
     report
+}
+
+/// Median, 99.9th percentile and maximum of the step `durations`, with the
+/// state the slowest began in.
+fn step_time(durations: &mut [(f64, StateKind)]) -> StepTime {
+    let Some(&(max_s, max_state)) = durations.iter().max_by(|a, b| a.0.total_cmp(&b.0)) else {
+        return StepTime::default();
+    };
+    durations.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let quantile = |q: f64| {
+        let index = ((durations.len() - 1) as f64 * q).round() as usize;
+        durations[index.min(durations.len() - 1)].0
+    };
+    StepTime {
+        median_s: quantile(0.5),
+        p999_s: quantile(0.999),
+        max_s,
+        max_state: Some(max_state),
+    }
 }
 
 fn model_report(arm: &limb_kernel::validate::ValidatedArm, truth: &Truth) -> ModelReport {
@@ -208,6 +295,15 @@ pub fn human(report: &SessionReport, header: &str) -> String {
             let _ = writeln!(out, "  {:>8.3} s  {}", line.time, line.what);
         }
     }
+    let st = &report.step_time;
+    let _ = writeln!(
+        out,
+        "step time (wall): median {:.2} µs, p99.9 {:.2} µs, max {:.1} µs in {:?}",
+        st.median_s * 1e6,
+        st.p999_s * 1e6,
+        st.max_s * 1e6,
+        st.max_state,
+    );
     let _ = writeln!(
         out,
         "final state: {:?} after {} kernel steps ({} with saturation); session {}",
@@ -231,13 +327,16 @@ impl ClosedLoopPlant for ReferencePlant {
         self.0.time()
     }
 
-    fn measure(&mut self) -> PathSample {
-        let m = self.0.measure();
-        PathSample {
-            time: m.time,
-            pose: m.pose,
-            wrench: m.wrench,
-        }
+    fn measure(&mut self) -> Measurement {
+        self.0.measure()
+    }
+
+    fn joints(&self) -> [f64; 2] {
+        self.0.state().0
+    }
+
+    fn logged_truth(&self) -> limb_sim::Truth {
+        self.0.truth()
     }
 
     fn advance(&mut self, set_point: Option<&SetPoint>, duration: f64) {
@@ -269,6 +368,11 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
     );
     let plan = SessionPlan::default();
     let report = run_session(&mut kernel, &mut plant, &plan);
+    if let Some(file) = &args.log {
+        std::fs::write(file, limb_sim::log::to_csv(&report.log)).map_err(|error| {
+            CliError::BadInput(format!("{}: cannot write the log: {error}", file.display()))
+        })?;
+    }
     let header = format!(
         "limb run: reference plant, arm l1 = {:.3} m, l2 = {:.3} m, noise seed {}, kernel at {:.0} Hz, \
          force limit {:.1} N",
@@ -295,6 +399,10 @@ pub struct RunArgs {
     /// Print one JSON object instead of the human report.
     #[arg(long)]
     pub json: bool,
+    /// Write the session (every kernel step's measurement, commanded
+    /// set-point and the plant's truth) to this CSV in the plant.md format.
+    #[arg(long)]
+    pub log: Option<std::path::PathBuf>,
 }
 
 /// The kernel configuration for `args`, checked.

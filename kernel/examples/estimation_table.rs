@@ -58,6 +58,7 @@ fn evidence_row(name: &str, log: &logs::Log) {
                 max_residual: f64::MAX,
                 max_method_disagreement: f64::MAX,
                 max_geometry_mismatch: 0.0,
+                max_shoulder_height: f64::MAX,
                 ..ValidationLimits::default()
             };
             let mismatch = match validate(&e, start, &open) {

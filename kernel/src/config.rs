@@ -7,7 +7,7 @@
 //! positive, every interval non-empty, the planned speeds within the speed
 //! limit.
 
-use crate::estimation::Method;
+use crate::lift::LiftShaping;
 use crate::motion::EstimationMotionParameters;
 use crate::validate::ValidationLimits;
 
@@ -112,13 +112,15 @@ impl Default for SafetyLimits {
             // peak at 0.095 m/s over 50 ms (data/nominal/case6.csv, t = 18.4 s).
             max_speed: 0.15,
             rate_window: 0.05,
-            // The reference lift (plant.md's estimation motion on the paper's
-            // dummy) ends at q1 = 1.40-1.86 rad and q2 = +0.28 to -0.31 rad
-            // (17.8° of elbow hyperextension for l1 = 0.27 m, l2 = 0.18 m;
-            // data/nominal/case*.csv): the defaults admit it. A clinician
-            // narrows them to the person's passive range.
+            // Passive ranges of an adult arm in the sagittal plane: shoulder
+            // flexion up to ≈ 115° before scapular motion dominates, elbow
+            // flexion ≈ 150°, hyperextension 0-10° (AAOS norms). The
+            // defaults allow 5° of hyperextension and 2.0 rad (115°) of
+            // elevation; the kernel's lift keeps the worst case of its
+            // provisional model `lift_shaping.joint_margin` inside them
+            // (HAZ-08). A clinician narrows them to the person's range.
             shoulder_elevation: Interval::new(-0.05, 2.0),
-            elbow_flexion: Interval::new(-0.35, 2.60),
+            elbow_flexion: Interval::new(-0.0873, 2.60),
             max_model_mismatch: 0.03,
             table_tolerance: 0.005,
             workspace_x: Interval::new(-0.10, 0.90),
@@ -140,8 +142,8 @@ pub struct KernelConfig {
     pub estimation_motion: EstimationMotionParameters,
     /// Peak grasp-point speed of manipulation moves [m/s].
     pub manipulation_peak_speed: f64,
-    /// Estimator used when the estimation motion ends.
-    pub estimation_method: Method,
+    /// How the estimation lift is shaped and ended by the provisional model.
+    pub lift_shaping: LiftShaping,
     /// Validator limits.
     pub validation: ValidationLimits,
 }
@@ -151,9 +153,12 @@ impl Default for KernelConfig {
         Self {
             impedance: ImpedanceGains::default(),
             limits: SafetyLimits::default(),
+            // plant.md's lift; the kernel ends it early (`lift_shaping`).
+            // A longer one (0.35-0.40 m) was tried: short arms then swing
+            // past the speed limit as the upper arm rises.
             estimation_motion: EstimationMotionParameters::default(),
             manipulation_peak_speed: 0.05,
-            estimation_method: Method::Auto,
+            lift_shaping: LiftShaping::default(),
             validation: ValidationLimits::default(),
         }
     }
@@ -175,6 +180,8 @@ pub enum ConfigError {
     PlannedSpeed,
     /// A validation limit is non-finite or inconsistent.
     Validation,
+    /// A lift-shaping value is non-finite or not positive.
+    LiftShaping,
 }
 
 impl ConfigError {
@@ -187,6 +194,7 @@ impl ConfigError {
             ConfigError::EstimationMotion => 4,
             ConfigError::PlannedSpeed => 5,
             ConfigError::Validation => 6,
+            ConfigError::LiftShaping => 7,
         }
     }
 }
@@ -257,12 +265,16 @@ impl KernelConfig {
             v.max_residual,
             v.max_method_disagreement,
             v.max_geometry_mismatch,
+            v.max_shoulder_height,
         ];
         if !(validation.iter().all(|x| positive(*x))
             && v.min_upper_arm_length <= v.max_upper_arm_length
             && v.min_forearm_length <= v.max_forearm_length)
         {
             return Err(ConfigError::Validation);
+        }
+        if !self.lift_shaping.is_valid() {
+            return Err(ConfigError::LiftShaping);
         }
         Ok(())
     }

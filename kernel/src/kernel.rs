@@ -7,8 +7,10 @@
 //! 2. runs the watchdog on the frame and the clock;
 //! 3. updates the rate window (speed, force rate);
 //! 4. runs the monitors that apply to the state ([`crate::monitor`]);
-//! 5. computes the state's set-point (recording the path and, when the
-//!    estimation motion ends, estimating and validating the arm);
+//! 5. computes the state's set-point (in Estimate: recording the path into
+//!    the online estimate, shaping the lift, refining the estimate while
+//!    held); on the step the refinement finishes, the validator turns the
+//!    estimate into a Validated state or refuses it;
 //! 6. runs the impedance generator and checks the command is finite.
 //!
 //! Any violation or failure in 2-6 enters SafeStop in the same step and the
@@ -19,13 +21,16 @@
 //! The kernel owns no clock and does no I/O: `now` is an input.
 //!
 //! # Timing
-//! Steps are O(1) except the one that concludes the estimation motion,
-//! which runs the estimator over the recorded path (bounded by
-//! [`crate::path::PATH_CAPACITY`]; see the benchmarks for its figure).
+//! Every step is O(1): a recording step adds one sample to the online
+//! estimate ([`crate::estimation::online`]); while concluding, a step runs
+//! at most [`crate::estimation::refine::SAMPLES_PER_STEP`] samples of the
+//! refinement; the step that finishes it runs the validator once. Figures:
+//! `cargo bench -p limb-kernel --bench estimators` and the `step_time` of
+//! `limb run --json`.
 
-use crate::arm::JointAngles;
 use crate::command::{Command, CommandMode};
 use crate::config::{ConfigError, KernelConfig, SafetyLimits};
+use crate::estimation::ArmEstimate;
 use crate::geometry::{Pose, Wrench};
 use crate::impedance::{ImpedanceLaw, Saturation};
 use crate::monitor::force::ForceMonitor;
@@ -36,115 +41,13 @@ use crate::monitor::watchdog::Watchdog;
 use crate::monitor::workspace::WorkspaceMonitor;
 use crate::monitor::Verdict;
 use crate::motion::SetPoint;
-use crate::path::{GraspPath, PathSample, PATH_SAMPLE_PERIOD};
-use crate::state::{Grasp, StateKind, StopReason, TargetError};
+use crate::path::{GraspPath, PathSample};
+use crate::state::{
+    EstimateStep, Grasp, LimitUpdateRefusal, Refusal, RefusalReason, Request, State, StateKind,
+    StopReason,
+};
 use crate::trace::{Cause, Event, Trace, TraceEvent};
 use crate::validate::ValidatedArm;
-
-/// The kernel's current state.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum State {
-    /// See [`crate::state::Grasp`].
-    Grasp(Grasp),
-    /// See [`crate::state::Estimate`].
-    Estimate(crate::state::Estimate),
-    /// See [`crate::state::Validated`].
-    Validated(crate::state::Validated),
-    /// See [`crate::state::Manipulate`].
-    Manipulate(crate::state::Manipulate),
-    /// See [`crate::state::SafeStop`].
-    SafeStop(crate::state::SafeStop),
-}
-
-impl State {
-    /// The state's name.
-    pub fn kind(&self) -> StateKind {
-        match self {
-            State::Grasp(_) => StateKind::Grasp,
-            State::Estimate(_) => StateKind::Estimate,
-            State::Validated(_) => StateKind::Validated,
-            State::Manipulate(_) => StateKind::Manipulate,
-            State::SafeStop(_) => StateKind::SafeStop,
-        }
-    }
-
-    /// The validated model, in the states that hold one.
-    pub fn arm(&self) -> Option<&ValidatedArm> {
-        match self {
-            State::Validated(v) => Some(v.arm()),
-            State::Manipulate(m) => Some(m.arm()),
-            _ => None,
-        }
-    }
-}
-
-/// An operator's or supervisor's request.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub enum Request {
-    /// Grasp → Estimate: start the estimation motion from the current pose.
-    StartEstimation,
-    /// Validated → Manipulate: move the arm to these joint angles.
-    ApproveManipulation(JointAngles),
-    /// Manipulate → Validated: end the manipulation and hold.
-    FinishManipulation,
-    /// Any state → SafeStop.
-    Stop,
-    /// SafeStop → Grasp.
-    Reset,
-}
-
-/// Why a request was refused.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub enum RefusalReason {
-    /// The current state has no transition for this request.
-    NotAllowedInState,
-    /// No fresh, finite measurement to start from.
-    NoFreshMeasurement,
-    /// `now` is not finite or went backwards.
-    InvalidTime,
-    /// The manipulation target was refused.
-    Target(TargetError),
-    /// The estimation motion could not be planned.
-    Plan(crate::motion::PlanError),
-}
-
-impl RefusalReason {
-    /// Stable numeric code of the reason.
-    pub const fn code(&self) -> u16 {
-        match self {
-            RefusalReason::NotAllowedInState => 1,
-            RefusalReason::NoFreshMeasurement => 2,
-            RefusalReason::InvalidTime => 3,
-            RefusalReason::Target(_) => 4,
-            RefusalReason::Plan(_) => 5,
-        }
-    }
-}
-
-/// Why new safety limits were refused.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub enum LimitUpdateRefusal {
-    /// Limits change only while the arm is held still: in Grasp, Validated
-    /// or SafeStop, never during the estimation motion or a manipulation.
-    NotAllowedInState(StateKind),
-    /// The configuration with the new limits fails [`KernelConfig::check`].
-    Invalid(ConfigError),
-}
-
-/// A refused request: what was asked, in which state, and why.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct Refusal {
-    /// The request.
-    pub request: Request,
-    /// The state it was refused in.
-    pub state: StateKind,
-    /// Why.
-    pub reason: RefusalReason,
-}
 
 /// The kernel: configuration, state, recorded path and monitors.
 ///
@@ -229,7 +132,11 @@ impl Kernel {
             return self.stop(StopReason::Monitor(violation), now, Some(frame.pose));
         }
         let (set_point, mode) = match self.state_set_point(frame, now) {
-            Ok(v) => v,
+            Ok(Plan::Follow(set_point, mode)) => (set_point, mode),
+            Ok(Plan::Validate(estimate)) => match self.conclude_estimation(&estimate, now) {
+                Ok(hold) => (hold, CommandMode::Hold),
+                Err(reason) => return self.stop(reason, now, Some(frame.pose)),
+            },
             Err(reason) => return self.stop(reason, now, Some(frame.pose)),
         };
         let out = self.law.command(frame.pose, rates.velocity, set_point);
@@ -402,52 +309,67 @@ impl Kernel {
         let (joints, workspace) = self.geometry_monitors();
         let arm = self.state.arm().map(ValidatedArm::geometry);
         workspace.check(frame.pose, arm.map(|a| a.elbow_from_pose(frame.pose)))?;
-        match arm {
-            Some(arm) => joints.check(arm, frame.pose),
-            None => Ok(()),
+        match (&self.state, arm) {
+            (_, Some(arm)) => joints.check(arm, frame.pose),
+            (State::Estimate(estimate), None) => {
+                joints.check_envelope(estimate.joint_envelope(frame.pose, &self.config.validation))
+            }
+            _ => Ok(()),
         }
     }
 
-    /// The state's set-point for this step, with its mode. Concludes the
-    /// estimation motion when it is over.
-    fn state_set_point(
-        &mut self,
-        frame: &PathSample,
-        now: f64,
-    ) -> Result<(SetPoint, CommandMode), StopReason> {
-        match &mut self.state {
-            State::Grasp(grasp) => Ok((grasp.hold(frame.pose), CommandMode::Hold)),
-            State::Validated(validated) => Ok((validated.hold(), CommandMode::Hold)),
-            State::Manipulate(manipulate) => Ok((manipulate.set_point(now), CommandMode::Track)),
-            State::SafeStop(_) => Err(StopReason::Operator),
-            State::Estimate(estimate) => {
-                let due = self
-                    .path
-                    .last()
-                    .is_none_or(|last| frame.time - last.time >= PATH_SAMPLE_PERIOD * (1.0 - 1e-6));
-                if due && self.path.push(*frame).is_err() {
-                    return Err(StopReason::PathBufferFull);
-                }
-                if !estimate.is_finished(now) {
-                    return Ok((estimate.set_point(now), CommandMode::Track));
-                }
-                let estimate = *estimate;
-                let validated = estimate.conclude(
-                    &self.path,
-                    self.config.estimation_method,
-                    &self.config.validation,
-                )?;
-                let hold = validated.hold();
-                self.state = State::Validated(validated);
-                self.record(
-                    now,
-                    StateKind::Estimate,
-                    StateKind::Validated,
-                    Cause::ModelValidated,
-                );
-                Ok((hold, CommandMode::Hold))
+    /// The state's set-point for this step, with its mode, or, on the step
+    /// the estimation's refinement finishes, the estimate to validate.
+    fn state_set_point(&mut self, frame: &PathSample, now: f64) -> Result<Plan, StopReason> {
+        Ok(match &mut self.state {
+            State::Grasp(grasp) => Plan::Follow(grasp.hold(frame.pose), CommandMode::Hold),
+            State::Validated(validated) => Plan::Follow(validated.hold(), CommandMode::Hold),
+            State::Manipulate(manipulate) => {
+                Plan::Follow(manipulate.set_point(now), CommandMode::Track)
             }
-        }
+            State::SafeStop(_) => return Err(StopReason::Operator),
+            State::Estimate(estimate) => {
+                let lifting = estimate.lift().ended().is_none();
+                let step = estimate.advance(&mut self.path, frame, now, &self.config)?;
+                if let Some(reason) = estimate.lift().ended().filter(|_| lifting) {
+                    self.trace.record(TraceEvent {
+                        time: now,
+                        event: Event::LiftEnded(reason),
+                    });
+                }
+                match step {
+                    EstimateStep::Move(set_point) => Plan::Follow(set_point, CommandMode::Track),
+                    EstimateStep::Hold(set_point) => Plan::Follow(set_point, CommandMode::Hold),
+                    EstimateStep::Concluded(estimate) => Plan::Validate(estimate),
+                }
+            }
+        })
+    }
+
+    /// Estimate → Validated through the validator (the only way to a
+    /// validated model); returns the hold set-point.
+    fn conclude_estimation(
+        &mut self,
+        estimate: &ArmEstimate,
+        now: f64,
+    ) -> Result<SetPoint, StopReason> {
+        let State::Estimate(estimating) = self.state else {
+            return Err(StopReason::Operator);
+        };
+        let start = self
+            .path
+            .first()
+            .map_or(estimating.grasp_pose().point(), |s| s.pose.point());
+        let validated = estimating.conclude(estimate, start, &self.config.validation)?;
+        let hold = validated.hold();
+        self.state = State::Validated(validated);
+        self.record(
+            now,
+            StateKind::Estimate,
+            StateKind::Validated,
+            Cause::ModelValidated,
+        );
+        Ok(hold)
     }
 
     /// Enters SafeStop for `reason` and returns the stop command.
@@ -472,6 +394,14 @@ impl Kernel {
             event: Event::Transition { from, to, cause },
         });
     }
+}
+
+/// What the state asks of this step.
+enum Plan {
+    /// Command this set-point in this mode.
+    Follow(SetPoint, CommandMode),
+    /// The estimation concluded: validate this estimate.
+    Validate(ArmEstimate),
 }
 
 /// Moves any state into SafeStop.

@@ -12,14 +12,19 @@
 //!                                                                 │ violation → SafeStop
 //!                                                                 ▼
 //!        state (Grasp │ Estimate │ Validated │ Manipulate │ SafeStop) ─▶ set-point
-//!          Estimate: path ─▶ estimation ─▶ validate ─▶ ValidatedArm   (motion)
+//!          Estimate: sample ─▶ path + estimation::online (O(1)) ─▶ provisional arm
+//!                      ─▶ joint envelope ─▶ monitor::joint_limits + lift (shaped, ended)
+//!                    held: estimation::refine (≤ SAMPLES_PER_STEP per step)
+//!                      ─▶ validate ─▶ ValidatedArm                (motion)
 //!                                                                 ▼
 //!                                         impedance (saturated) ─▶ Command
 //! ```
 //!
 //! Modules: [`geometry`] (frame S quantities), [`arm`] (two-link kinematics),
-//! [`motion`] (minimum-jerk set-points, the estimation motion), [`path`]
-//! (the recorded grasp path), [`estimation`] (circle fits, Hough),
+//! [`motion`] (minimum-jerk set-points, the estimation motion), [`lift`]
+//! (the estimation lift shaped and ended by the provisional model), [`path`]
+//! (the recorded grasp path), [`estimation`] (circle fits, Hough, the
+//! online estimator and its bounded refinement),
 //! [`validate`] (the only maker of [`validate::ValidatedArm`]), [`state`]
 //! (typed states and transitions), [`monitor`], [`impedance`], [`command`],
 //! [`trace`], [`config`], and [`kernel`] (the runtime wrapper).
@@ -42,6 +47,7 @@ pub mod estimation;
 pub mod geometry;
 pub mod impedance;
 pub mod kernel;
+pub mod lift;
 pub mod monitor;
 pub mod motion;
 pub mod path;
@@ -51,6 +57,8 @@ pub mod validate;
 
 pub use command::{Command, CommandMode};
 pub use config::KernelConfig;
-pub use kernel::{Kernel, LimitUpdateRefusal, Refusal, RefusalReason, Request, State};
+pub use kernel::Kernel;
 pub use path::PathSample;
-pub use state::{StateKind, StopReason};
+pub use state::{
+    LimitUpdateRefusal, Refusal, RefusalReason, Request, State, StateKind, StopReason,
+};

@@ -118,6 +118,35 @@ impl MinimumJerkMove {
         })
     }
 
+    /// Plans the move from `start` to `goal` with grasp-point peak speed
+    /// `peak_speed` [m/s], forearm peak rate `peak_rate` [rad/s] and at least
+    /// `min_duration` [s]: the longest of the three needs. The floor bounds
+    /// the acceleration of short moves (peak 5.77 d/T²), which the
+    /// impedance's inertia feed-forward turns into force.
+    ///
+    /// # Errors
+    /// As [`Self::new`]; a rate that is not strictly positive is
+    /// [`PlanError::NonPositiveSpeed`], a non-finite duration
+    /// [`PlanError::NonFinite`].
+    pub fn bounded(
+        start: Pose,
+        goal: Pose,
+        peak_speed: f64,
+        peak_rate: f64,
+        min_duration: f64,
+    ) -> Result<Self, PlanError> {
+        let mut planned = Self::new(start, goal, peak_speed)?;
+        if !(peak_rate.is_finite() && min_duration.is_finite()) {
+            return Err(PlanError::NonFinite);
+        }
+        if peak_rate <= 0.0 {
+            return Err(PlanError::NonPositiveSpeed);
+        }
+        let turn = MINIMUM_JERK_PEAK_RATE * libm::fabs(goal.psi - start.psi) / peak_rate;
+        planned.duration = planned.duration.max(turn).max(min_duration);
+        Ok(planned)
+    }
+
     /// Duration of the moving part T [s].
     pub fn duration(&self) -> f64 {
         self.duration

@@ -28,3 +28,10 @@ pub struct PathSample {
 
 /// The recorded grasp path.
 pub type GraspPath = heapless::Vec<PathSample, PATH_CAPACITY>;
+
+/// True when a sample stamped `time` [s] is due for recording after `last`:
+/// at least [`PATH_SAMPLE_PERIOD`] later (to within 1 ppm, so a 100 Hz log
+/// with rounded time stamps keeps every row), or the first.
+pub fn is_due(last: Option<&PathSample>, time: f64) -> bool {
+    last.is_none_or(|last| time - last.time >= PATH_SAMPLE_PERIOD * (1.0 - 1e-6))
+}

@@ -1,9 +1,11 @@
 //! The typed states of a session and the transitions between them.
 //!
 //! ```text
-//!            StartEstimation           motion done,          ApproveManipulation
+//!            StartEstimation        refinement done,        ApproveManipulation
 //!   Grasp ──────────────────▶ Estimate ─────────────▶ Validated ──────────────▶ Manipulate
-//!     ▲                          │      validator ok     ▲  │                      │
+//!     ▲          (lifting → settling │      validator ok     ▲  │                      │
+//!     │           → concluding, see  │                       │  │                      │
+//!     │           crate::lift)       │                       │  │                      │
 //!     │ Reset                    │                       │  └──────────────────────┘
 //!     │                          ▼                       │     FinishManipulation
 //!  SafeStop ◀──── any violation, Stop, rejected estimate, failure (from every state)
@@ -18,20 +20,27 @@
 //! `Manipulate` without a validated model does not compile. [`SafeStop`] is
 //! latched: its only exit is [`SafeStop::reset`], back to [`Grasp`].
 //!
-//! The runtime wrapper ([`crate::kernel`]) holds one of these in an enum
-//! and refuses, with a reason, any request the current state has no
-//! transition for.
+//! The runtime wrapper ([`crate::kernel`]) holds one of these in [`State`]
+//! and refuses, with a reason ([`Refusal`]), any [`Request`] the current
+//! state has no transition for. [`Estimate::advance`] does one step of the
+//! estimation (record, shape the lift, or a slice of the refinement); when
+//! it returns [`EstimateStep::Concluded`] the kernel calls
+//! [`Estimate::conclude`].
 
 use crate::arm::JointAngles;
-use crate::estimation::{estimate_arm, EstimateError, Method};
+use crate::config::{ConfigError, KernelConfig};
+use crate::estimation::online::{JointEnvelope, OnlineEstimator};
+use crate::estimation::refine::{Progress, SAMPLES_PER_STEP};
+use crate::estimation::{ArmEstimate, EstimateError};
 use crate::geometry::{Point, Pose};
+use crate::lift::{LiftCommand, LiftPhase, ShapedLift};
 use crate::monitor::joint_limits::JointLimitMonitor;
 use crate::monitor::workspace::WorkspaceMonitor;
 use crate::monitor::Violation;
 use crate::motion::{
     EstimationMotion, EstimationMotionParameters, MinimumJerkMove, PlanError, SetPoint,
 };
-use crate::path::PathSample;
+use crate::path::{is_due, GraspPath, PathSample};
 use crate::validate::{validate, Rejection, ValidatedArm, ValidationLimits};
 
 /// Names of the states, for events and reports.
@@ -93,11 +102,24 @@ pub struct Grasp {
     hold: Option<Pose>,
 }
 
-/// Estimate: the estimation motion is running.
+/// Estimate: the estimation lift is running, shaped by the provisional
+/// model ([`crate::lift`]), the path recorded and estimated online; then,
+/// held still, the estimate is refined in bounded slices.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Estimate {
-    motion: EstimationMotion,
-    started_at: f64,
+    lift: ShapedLift,
+    online: OnlineEstimator,
+}
+
+/// What one Estimate step produced.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum EstimateStep {
+    /// Follow this moving set-point (the lift).
+    Move(SetPoint),
+    /// Hold this set-point (paused, settling or concluding).
+    Hold(SetPoint),
+    /// The refinement finished: this estimate goes to the validator.
+    Concluded(ArmEstimate),
 }
 
 /// Validated: a validated model, the arm held still.
@@ -186,8 +208,8 @@ impl Grasp {
     ) -> Result<Estimate, (Self, PlanError)> {
         match EstimationMotion::new(grasp, parameters) {
             Ok(motion) => Ok(Estimate {
-                motion,
-                started_at: now,
+                lift: ShapedLift::new(motion, now),
+                online: OnlineEstimator::new(),
             }),
             Err(error) => Err((self, error)),
         }
@@ -206,40 +228,97 @@ impl Default for Grasp {
 }
 
 impl Estimate {
-    /// The set-point at time `now`.
-    pub fn set_point(&self, now: f64) -> SetPoint {
-        self.motion.at(now - self.started_at)
-    }
-
-    /// True once the lift and the hold are over at `now`.
-    pub fn is_finished(&self, now: f64) -> bool {
-        self.motion.is_finished(now - self.started_at)
-    }
-
     /// The grasp pose the motion started from.
     pub fn grasp_pose(&self) -> Pose {
-        self.motion.lift().start()
+        self.lift.motion().lift().start()
     }
 
-    /// Estimates the arm from `path` and validates it: the only way into
-    /// [`Validated`]. The arm is then held at the motion's goal.
+    /// The lift and where it is.
+    pub fn lift(&self) -> &ShapedLift {
+        &self.lift
+    }
+
+    /// The online estimate so far.
+    pub fn online(&self) -> &OnlineEstimator {
+        &self.online
+    }
+
+    /// One step at kernel time `now` with measured `frame`: records the
+    /// sample into `path` and the online estimate when one is due (at most
+    /// one per [`PATH_SAMPLE_PERIOD`], never while concluding), shapes the
+    /// lift, or runs one slice of the refinement. O(1) work: one moment
+    /// update, or at most [`SAMPLES_PER_STEP`] refinement samples.
     ///
     /// # Errors
-    /// The stop reason: estimation failed or the model was rejected.
+    /// The path buffer is full, no forearm appeared in time, or the
+    /// estimation failed.
+    pub fn advance(
+        &mut self,
+        path: &mut GraspPath,
+        frame: &PathSample,
+        now: f64,
+        config: &KernelConfig,
+    ) -> Result<EstimateStep, StopReason> {
+        if self.lift.is_recording() && is_due(path.last(), frame.time) {
+            path.push(*frame).map_err(|_| StopReason::PathBufferFull)?;
+            self.online.record(path);
+        }
+        if let Some((hold, reason)) = self.lift.settled(now, config.lift_shaping.settle_time) {
+            let refinement =
+                self.online
+                    .refinement(path.len())
+                    .ok_or(StopReason::EstimationFailed(
+                        EstimateError::UpperArmPhaseTooShort,
+                    ))?;
+            *self.lift.phase_mut() = LiftPhase::Concluding {
+                hold,
+                reason,
+                refinement,
+            };
+        }
+        if let LiftPhase::Concluding {
+            hold, refinement, ..
+        } = self.lift.phase_mut()
+        {
+            return match refinement.advance(path, SAMPLES_PER_STEP) {
+                Progress::Running(_) => Ok(EstimateStep::Hold(SetPoint::hold(*hold))),
+                Progress::Done(Ok(estimate)) => Ok(EstimateStep::Concluded(estimate)),
+                Progress::Done(Err(error)) => Err(StopReason::EstimationFailed(error)),
+            };
+        }
+        let command = self
+            .lift
+            .advance(now, frame, &self.online, config)
+            .map_err(StopReason::EstimationFailed)?;
+        Ok(match command {
+            LiftCommand::Move(set_point) => EstimateStep::Move(set_point),
+            LiftCommand::Hold(set_point) => EstimateStep::Hold(set_point),
+        })
+    }
+
+    /// The worst case of the person's joints at `pose` under the provisional
+    /// model and the validator's ranges `prior`; `None` before a provisional
+    /// forearm exists.
+    pub fn joint_envelope(&self, pose: Pose, prior: &ValidationLimits) -> Option<JointEnvelope> {
+        self.online.joint_envelope(pose, prior)
+    }
+
+    /// Validates the refined `estimate` of the path that started at grasp
+    /// point `start`: the only way into [`Validated`]. The arm is then held
+    /// where the lift ended.
+    ///
+    /// # Errors
+    /// The stop reason: the model was rejected.
     pub fn conclude(
         self,
-        path: &[PathSample],
-        method: Method,
+        estimate: &ArmEstimate,
+        start: Point,
         limits: &ValidationLimits,
     ) -> Result<Validated, StopReason> {
-        let estimate = estimate_arm(path, method).map_err(StopReason::EstimationFailed)?;
-        let start: Point = path
-            .first()
-            .map_or(self.grasp_pose().point(), |s| s.pose.point());
-        let arm = validate(&estimate, start, limits).map_err(StopReason::ModelRejected)?;
+        let arm = validate(estimate, start, limits).map_err(StopReason::ModelRejected)?;
         Ok(Validated {
             arm,
-            hold: self.motion.lift().goal(),
+            hold: self.lift.hold().unwrap_or(self.grasp_pose()),
         })
     }
 
@@ -349,4 +428,112 @@ impl SafeStop {
     pub fn reset(self) -> Grasp {
         Grasp::new()
     }
+}
+
+/// The kernel's current state.
+#[derive(Clone, Copy, Debug, PartialEq)]
+// No heap (no_std, no alloc): the larger variant (the estimation's running
+// sums, ≈ 1 kB) lives inline; the kernel is one fixed-size value.
+#[allow(clippy::large_enum_variant)]
+pub enum State {
+    /// See [`Grasp`].
+    Grasp(Grasp),
+    /// See [`Estimate`].
+    Estimate(Estimate),
+    /// See [`Validated`].
+    Validated(Validated),
+    /// See [`Manipulate`].
+    Manipulate(Manipulate),
+    /// See [`SafeStop`].
+    SafeStop(SafeStop),
+}
+
+impl State {
+    /// The state's name.
+    pub fn kind(&self) -> StateKind {
+        match self {
+            State::Grasp(_) => StateKind::Grasp,
+            State::Estimate(_) => StateKind::Estimate,
+            State::Validated(_) => StateKind::Validated,
+            State::Manipulate(_) => StateKind::Manipulate,
+            State::SafeStop(_) => StateKind::SafeStop,
+        }
+    }
+
+    /// The validated model, in the states that hold one.
+    pub fn arm(&self) -> Option<&ValidatedArm> {
+        match self {
+            State::Validated(v) => Some(v.arm()),
+            State::Manipulate(m) => Some(m.arm()),
+            _ => None,
+        }
+    }
+}
+
+/// An operator's or supervisor's request.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum Request {
+    /// Grasp → Estimate: start the estimation motion from the current pose.
+    StartEstimation,
+    /// Validated → Manipulate: move the arm to these joint angles.
+    ApproveManipulation(JointAngles),
+    /// Manipulate → Validated: end the manipulation and hold.
+    FinishManipulation,
+    /// Any state → SafeStop.
+    Stop,
+    /// SafeStop → Grasp.
+    Reset,
+}
+
+/// Why a request was refused.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum RefusalReason {
+    /// The current state has no transition for this request.
+    NotAllowedInState,
+    /// No fresh, finite measurement to start from.
+    NoFreshMeasurement,
+    /// `now` is not finite or went backwards.
+    InvalidTime,
+    /// The manipulation target was refused.
+    Target(TargetError),
+    /// The estimation motion could not be planned.
+    Plan(crate::motion::PlanError),
+}
+
+impl RefusalReason {
+    /// Stable numeric code of the reason.
+    pub const fn code(&self) -> u16 {
+        match self {
+            RefusalReason::NotAllowedInState => 1,
+            RefusalReason::NoFreshMeasurement => 2,
+            RefusalReason::InvalidTime => 3,
+            RefusalReason::Target(_) => 4,
+            RefusalReason::Plan(_) => 5,
+        }
+    }
+}
+
+/// Why new safety limits were refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum LimitUpdateRefusal {
+    /// Limits change only while the arm is held still: in Grasp, Validated
+    /// or SafeStop, never during the estimation motion or a manipulation.
+    NotAllowedInState(StateKind),
+    /// The configuration with the new limits fails [`KernelConfig::check`].
+    Invalid(ConfigError),
+}
+
+/// A refused request: what was asked, in which state, and why.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Refusal {
+    /// The request.
+    pub request: Request,
+    /// The state it was refused in.
+    pub state: StateKind,
+    /// Why.
+    pub reason: RefusalReason,
 }

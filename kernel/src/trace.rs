@@ -5,7 +5,8 @@
 //! drained fast enough the oldest events are dropped and counted, so a loss
 //! is visible, never silent.
 
-use crate::kernel::{Refusal, Request};
+use crate::lift::LiftEnd;
+use crate::state::{Refusal, Request};
 use crate::state::{StateKind, StopReason};
 use heapless::Deque;
 
@@ -39,6 +40,9 @@ pub enum Event {
     },
     /// A request was refused; the state did not change.
     Refused(Refusal),
+    /// The estimation lift ended (Estimate goes on: settling, then the
+    /// refinement), and why.
+    LiftEnded(LiftEnd),
 }
 
 /// An event with the kernel time it happened at [s].

@@ -56,6 +56,7 @@ fn fault_codes_are_stable() {
         (ConfigError::EstimationMotion.code(), 4),
         (ConfigError::PlannedSpeed.code(), 5),
         (ConfigError::Validation.code(), 6),
+        (ConfigError::LiftShaping.code(), 7),
     ];
     for (row, (code, expected)) in table.into_iter().enumerate() {
         assert_eq!(code, expected, "row {row}");

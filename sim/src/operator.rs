@@ -147,6 +147,9 @@ pub fn describe(event: &TraceEvent) -> String {
             "refused {:?} in {:?}: {:?}",
             refusal.request, refusal.state, refusal.reason
         ),
+        Event::LiftEnded(reason) => {
+            format!("lift ended: {reason:?}; holding while the estimate is refined")
+        }
     }
 }
 

@@ -213,3 +213,17 @@ pub fn checked_step(
     oracle.check_latched(&command)?;
     Ok(command)
 }
+
+/// True when the worst-case joints of the provisional model during Estimate
+/// (largest shoulder elevation, smallest elbow flexion [rad]) lie outside
+/// the configured limits, NaN included (REQ-MON-011). Written from the
+/// requirement, independently of `JointLimitMonitor::check_envelope`.
+pub fn envelope_violation(
+    max_shoulder_elevation: f64,
+    min_elbow_flexion: f64,
+    config: &KernelConfig,
+) -> bool {
+    let l = &config.limits;
+    !(max_shoulder_elevation <= l.shoulder_elevation.high
+        && min_elbow_flexion >= l.elbow_flexion.low)
+}

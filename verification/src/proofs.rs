@@ -14,10 +14,13 @@
 #[cfg(not(kani))]
 use crate::kani_stand_in as kani;
 
-use crate::checks::{check_command, checked_step, model_violation, SessionOracle};
+use crate::checks::{
+    check_command, checked_step, envelope_violation, model_violation, SessionOracle,
+};
 use crate::scenario::{arm, kernel_after_lift, kernel_in_grasp, lift_angles, LIFT_WRENCH, TARGET};
 use limb_kernel::arm::JointAngles;
 use limb_kernel::config::SafetyLimits;
+use limb_kernel::estimation::online::JointEnvelope;
 use limb_kernel::estimation::{estimate_arm, Method};
 use limb_kernel::geometry::{Pose, PoseRate, Wrench};
 use limb_kernel::impedance::ImpedanceLaw;
@@ -279,4 +282,34 @@ pub fn proof_estimator_is_total() {
         assert!(estimate.upper_arm_length.is_finite() && estimate.forearm_length.is_finite());
     }
     kani::cover!(result.is_err(), "estimator: typed error");
+}
+
+/// REQ-MON-011: during Estimate the joint-limit monitor on the provisional
+/// model trips exactly when the worst-case shoulder elevation is above its
+/// limit or the worst-case elbow flexion below it (NaN included), and
+/// passes while no provisional model exists. Comparisons only: no loop, no
+/// transcendental function, so no unwind bound is needed.
+#[cfg_attr(kani, kani::proof)]
+pub fn proof_req_mon_011_envelope_monitor_trips_beyond_limits() {
+    let config = KernelConfig::default();
+    let l = &config.limits;
+    let monitor = JointLimitMonitor {
+        shoulder_elevation: l.shoulder_elevation,
+        elbow_flexion: l.elbow_flexion,
+        max_model_mismatch: l.max_model_mismatch,
+    };
+    let envelope = JointEnvelope {
+        max_shoulder_elevation: kani::any(),
+        min_elbow_flexion: kani::any(),
+    };
+    let verdict = monitor.check_envelope(Some(envelope));
+    let expected = envelope_violation(
+        envelope.max_shoulder_elevation,
+        envelope.min_elbow_flexion,
+        &config,
+    );
+    assert_eq!(verdict.is_err(), expected);
+    assert!(monitor.check_envelope(None).is_ok());
+    kani::cover!(verdict.is_err(), "envelope monitor: trips");
+    kani::cover!(verdict.is_ok(), "envelope monitor: passes");
 }

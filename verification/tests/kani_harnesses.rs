@@ -45,4 +45,9 @@ fn stand_in_runs_every_harness() {
     check("gating", 500, proof_manipulate_needs_a_validated_model);
     check("latch", 500, proof_safe_stop_is_latched);
     check("estimator", 5_000, proof_estimator_is_total);
+    check(
+        "envelope monitor",
+        20_000,
+        proof_req_mon_011_envelope_monitor_trips_beyond_limits,
+    );
 }

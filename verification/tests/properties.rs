@@ -9,7 +9,7 @@
 use limb_kernel::arm::{ArmGeometry, JointAngles};
 use limb_kernel::geometry::{Pose, Wrench};
 use limb_kernel::{Kernel, KernelConfig, PathSample, Request, StateKind};
-use limb_verification::checks::{checked_step, SessionOracle};
+use limb_verification::checks::{checked_step, envelope_violation, SessionOracle};
 use limb_verification::scenario::{
     arm, lift_angles, FRAME_PERIOD, LIFT_DURATION, LIFT_WRENCH, TARGET,
 };
@@ -318,6 +318,32 @@ fn arbitrary_sessions_keep_every_safety_property() {
 }
 
 proptest! {
+    /// REQ-MON-011: the Estimate joint-limit monitor agrees with the
+    /// independent check on any worst-case joints, finite or not, and the
+    /// kernel's online estimator never yields an envelope that hides a
+    /// non-finite pose.
+    #[test]
+    fn req_mon_011_envelope_monitor_matches_the_check(
+        shoulder in prop_oneof![-4.0f64..4.0, Just(f64::NAN), Just(f64::INFINITY)],
+        elbow in prop_oneof![-4.0f64..4.0, Just(f64::NAN), Just(f64::NEG_INFINITY)],
+    ) {
+        let config = KernelConfig::default();
+        let l = &config.limits;
+        let monitor = limb_kernel::monitor::joint_limits::JointLimitMonitor {
+            shoulder_elevation: l.shoulder_elevation,
+            elbow_flexion: l.elbow_flexion,
+            max_model_mismatch: l.max_model_mismatch,
+        };
+        let envelope = limb_kernel::estimation::online::JointEnvelope {
+            max_shoulder_elevation: shoulder,
+            min_elbow_flexion: elbow,
+        };
+        prop_assert_eq!(
+            monitor.check_envelope(Some(envelope)).is_err(),
+            envelope_violation(shoulder, elbow, &config)
+        );
+    }
+
     /// Any single frame, any clock: `step` returns a finite command within
     /// the limits, from every state a session can be in after a lift.
     #[test]

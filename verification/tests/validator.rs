@@ -87,6 +87,7 @@ proptest! {
             prop_assert!(e.elbow.z.abs() <= limits.max_geometry_mismatch);
             prop_assert!(e.evidence.method_disagreement.is_none_or(|d| d <= limits.max_method_disagreement));
             prop_assert!((e.elbow.distance(e.shoulder) - g.upper_arm_length()).abs() <= limits.max_geometry_mismatch);
+            prop_assert!((e.shoulder.z - e.elbow.z).abs() <= limits.max_shoulder_height);
         }
     }
 }

@@ -19,11 +19,12 @@ use limb_kernel::config::ConfigError;
 use limb_kernel::estimation::{CircleFitError, EstimateError};
 use limb_kernel::geometry::{Point, Pose, PoseRate, Wrench};
 use limb_kernel::impedance::Saturation;
-use limb_kernel::kernel::RefusalReason;
+use limb_kernel::lift::LiftEnd;
 use limb_kernel::monitor::{Limit, Violation};
 use limb_kernel::motion::{PlanError, SetPoint};
 use limb_kernel::state::TargetError;
 use limb_kernel::trace::{Cause as KernelCause, Event, TraceEvent};
+use limb_kernel::RefusalReason;
 use limb_kernel::{Command, PathSample, Refusal, Request, StateKind, StopReason};
 use serde::{Deserialize, Serialize};
 
@@ -283,6 +284,7 @@ impl From<ConfigError> for Fault {
             ConfigError::EstimationMotion => "estimation_motion",
             ConfigError::PlannedSpeed => "planned_speed",
             ConfigError::Validation => "validation",
+            ConfigError::LiftShaping => "lift_shaping",
         };
         Fault::named(e.code(), name)
     }
@@ -350,6 +352,44 @@ pub enum KernelEvent {
         /// What and why.
         refusal: KernelRefusal,
     },
+    /// The estimation lift ended (Estimate goes on: settling, then the
+    /// refinement).
+    LiftEnded {
+        /// Kernel time [s] (null when the clock was not finite).
+        time: Option<f64>,
+        /// Why it ended.
+        end: LiftEndReport,
+    },
+}
+
+/// Why the estimation lift ended.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "reason", rename_all = "snake_case")]
+pub enum LiftEndReport {
+    /// The upper arm swept the target arc.
+    ArcReached,
+    /// The joint envelope came within the margin of a joint limit.
+    JointMargin {
+        /// The limit's stable code (`Limit::code`).
+        limit: u16,
+        /// The limit's name.
+        limit_name: String,
+    },
+    /// The planned lift and its extension were complete.
+    MotionComplete,
+}
+
+impl From<LiftEnd> for LiftEndReport {
+    fn from(end: LiftEnd) -> Self {
+        match end {
+            LiftEnd::ArcReached => LiftEndReport::ArcReached,
+            LiftEnd::JointMargin(limit) => LiftEndReport::JointMargin {
+                limit: limit.code(),
+                limit_name: limit_name(limit).to_owned(),
+            },
+            LiftEnd::MotionComplete => LiftEndReport::MotionComplete,
+        }
+    }
 }
 
 fn finite(value: f64) -> Option<f64> {
@@ -375,6 +415,10 @@ impl From<TraceEvent> for KernelEvent {
             Event::Refused(refusal) => KernelEvent::Refused {
                 time,
                 refusal: refusal.into(),
+            },
+            Event::LiftEnded(end) => KernelEvent::LiftEnded {
+                time,
+                end: end.into(),
             },
         }
     }

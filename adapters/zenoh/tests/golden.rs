@@ -5,14 +5,15 @@
 //! new protocol version when old readers would misread it).
 
 use limb_kernel::command::CommandMode;
-use limb_kernel::config::{ConfigError, SafetyLimits};
+use limb_kernel::config::{ConfigError, Interval, SafetyLimits};
 use limb_kernel::geometry::{Point, Pose, PoseRate, Wrench};
 use limb_kernel::impedance::Saturation;
-use limb_kernel::kernel::RefusalReason;
+use limb_kernel::lift::LiftEnd;
 use limb_kernel::monitor::{Limit, Violation};
 use limb_kernel::motion::SetPoint;
 use limb_kernel::state::TargetError;
 use limb_kernel::trace::{Cause, Event, TraceEvent};
+use limb_kernel::RefusalReason;
 use limb_kernel::{Command, PathSample, Refusal, Request, StateKind, StopReason};
 use limb_zenoh::auth::CommandKey;
 use limb_zenoh::kernel_wire::{Joints, KernelRefusal, PlanarPoint};
@@ -110,8 +111,22 @@ fn messages() -> Golden {
         "command_update_limits",
         both_ways(&CommandMessage {
             sequence: 1_764_600_000_000_001,
+            // Explicit values: the golden pins the shape, not the defaults.
             command: SupervisorCommand::UpdateLimits {
-                limits: SafetyLimits::default(),
+                limits: SafetyLimits {
+                    max_force: 45.0,
+                    max_torque: 8.0,
+                    max_force_rate: 250.0,
+                    max_speed: 0.15,
+                    rate_window: 0.05,
+                    shoulder_elevation: Interval::new(-0.05, 2.0),
+                    elbow_flexion: Interval::new(-0.35, 2.6),
+                    max_model_mismatch: 0.03,
+                    table_tolerance: 0.005,
+                    workspace_x: Interval::new(-0.1, 0.9),
+                    workspace_z: Interval::new(-0.01, 0.9),
+                    max_sensor_age: 0.02,
+                },
             },
         }),
     );
@@ -245,6 +260,18 @@ fn messages() -> Golden {
                     state: StateKind::SafeStop,
                     reason: RefusalReason::NotAllowedInState,
                 }),
+            }
+            .into(),
+        }),
+    );
+    m.insert(
+        "event_lift_ended",
+        both_ways(&EventMessage {
+            sequence: 3,
+            kernel_dropped: 0,
+            event: TraceEvent {
+                time: 9.75,
+                event: Event::LiftEnded(LiftEnd::JointMargin(Limit::ShoulderElevation)),
             }
             .into(),
         }),

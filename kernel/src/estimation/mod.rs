@@ -25,7 +25,10 @@ mod circle;
 mod geometric;
 mod grasp;
 mod hough;
+pub mod moments;
+pub mod online;
 mod phase;
+pub mod refine;
 
 pub use circle::{fit_circle_kasa, fit_circle_taubin, Circle, CircleFitError};
 pub use geometric::{fit_circle_geometric, GeometricFit};
@@ -52,8 +55,12 @@ pub enum Method {
     Hough,
     /// Algebraic least-squares circle fit (paper eq. 22-28).
     Ls,
-    /// The project's best method.
+    /// The project's best offline method.
     Auto,
+    /// The kernel's own: online Kåsa moments and phase split while the path
+    /// is recorded, then a bounded geometric refinement (`online.rs`,
+    /// `refine.rs`); replayed sample by sample over a recorded path.
+    Online,
 }
 
 /// What the fits saw, for the validator to judge.
@@ -278,6 +285,7 @@ pub fn estimate_arm(path: &[PathSample], method: Method) -> Result<ArmEstimate, 
         return Err(EstimateError::NonFiniteSample);
     }
     let (phases, fits, method_disagreement) = match method {
+        Method::Online => return estimate_online(path),
         Method::Ls => {
             let phases = detect_phases(path, &PointModel::GRASP)?;
             let fits = fit_ls(path, &phases, PointModel::GRASP)?;
@@ -414,4 +422,28 @@ fn fit_robust(path: &[PathSample]) -> Result<(Phases, PhaseFits), EstimateError>
             elbow_path,
         },
     ))
+}
+
+/// The kernel's estimator replayed over a recorded path: each sample
+/// recorded in turn by an [`online::OnlineEstimator`], then the whole
+/// [`refine::Refinement`] at once.
+///
+/// # Errors
+/// No lift-off or no split ([`EstimateError::ForearmPhaseTooShort`],
+/// [`EstimateError::UpperArmPhaseTooShort`]), or a failed fit.
+pub fn estimate_online(path: &[PathSample]) -> Result<ArmEstimate, EstimateError> {
+    let mut online = online::OnlineEstimator::new();
+    for end in 1..=path.len().min(PATH_CAPACITY) {
+        online.record(path.get(..end).unwrap_or(&[]));
+    }
+    let mut refinement = online
+        .refinement(path.len())
+        .ok_or(EstimateError::UpperArmPhaseTooShort)?;
+    // Each call ends at least one pass: 2 ITERATIONS + 3 passes in all.
+    for _ in 0..2 * refine::ITERATIONS + 4 {
+        if let refine::Progress::Done(outcome) = refinement.advance(path, PATH_CAPACITY) {
+            return outcome;
+        }
+    }
+    Err(EstimateError::UpperArmPhaseTooShort)
 }

@@ -5,6 +5,7 @@
 use super::{at_most, within, Limit, Verdict, Violation};
 use crate::arm::ArmGeometry;
 use crate::config::Interval;
+use crate::estimation::online::JointEnvelope;
 use crate::geometry::Pose;
 
 /// Joint ranges of the person's arm.
@@ -31,5 +32,30 @@ impl JointLimitMonitor {
             self.shoulder_elevation,
         )?;
         within(Limit::ElbowFlexion, q.elbow_flexion, self.elbow_flexion)
+    }
+
+    /// Verdict on the worst-case joints of the provisional model during
+    /// Estimate (REQ-MON-011): the largest shoulder elevation must not
+    /// exceed its range, the smallest elbow flexion must not go below its
+    /// range (hyperextension). No envelope (no provisional model yet) is no
+    /// verdict: the lift's prior reach bounds the motion then.
+    pub fn check_envelope(&self, envelope: Option<JointEnvelope>) -> Verdict {
+        let Some(envelope) = envelope else {
+            return Ok(());
+        };
+        at_most(
+            Limit::ShoulderElevation,
+            envelope.max_shoulder_elevation,
+            self.shoulder_elevation.high,
+        )?;
+        if envelope.min_elbow_flexion >= self.elbow_flexion.low {
+            Ok(())
+        } else {
+            Err(Violation::new(
+                Limit::ElbowFlexion,
+                envelope.min_elbow_flexion,
+                self.elbow_flexion.low,
+            ))
+        }
     }
 }

@@ -1,0 +1,325 @@
+//! The kernel's online estimation: the phases of the estimation motion and
+//! a provisional arm model, updated in O(1) as each path sample is recorded.
+//!
+//! # Theory of operation
+//! [`OnlineEstimator::record`] is called once per recorded sample, with the
+//! path recorded so far (the new sample last). It
+//! 1. finds lift-off: the first sample with psi > [`LIFT_PSI`];
+//! 2. in the forearm phase (elbow resting on the table, the grasp point on
+//!    a circle about it), adds grasp points to running Kåsa moments
+//!    ([`CircleMoments`]) [`DEPARTURE_WINDOW`] samples late, so the circle
+//!    that judges a sample never contains it. Once the forearm has swept
+//!    [`PROVISIONAL_ARC`] the moments give a provisional forearm (l2, resting
+//!    elbow, 1σ uncertainties). A sample whose radial residual exceeds the
+//!    departure tolerance is flagged; when [`DEPARTURE_PERCENT`] % of the
+//!    last [`DEPARTURE_WINDOW`] samples are flagged the grasp has left the
+//!    circle for good (the elbow has lifted), and the forearm phase ends
+//!    where that window starts;
+//! 3. in the upper-arm phase, adds the elbow point E = G + l2 (cos psi,
+//!    −sin psi) (eq. 19-21, l2 the provisional forearm at the split) to a
+//!    second set of moments; after [`PROVISIONAL_ARC`] about its centre they
+//!    give a provisional upper arm (l1, shoulder).
+//!
+//! [`OnlineEstimator::joint_envelope`] turns the provisional model into the
+//! worst case of the person's joint angles at a pose: before the upper arm
+//! is known the shoulder is anywhere the validator's l1 range allows on the
+//! table line through the resting elbow (q1 extreme at the range's ends);
+//! after, the provisional shoulder widened by 3σ.
+//!
+//! # Bounds
+//! Per call: one moment update, one 3 × 3 solve and a few trigonometric
+//! functions, except the call that ends the forearm phase, which adds the
+//! window's [`DEPARTURE_WINDOW`] elbow points at once. No loop depends on
+//! the path length.
+
+use super::moments::{CircleMoments, MomentFit};
+pub use super::phase::{
+    DEPARTURE_PERCENT, DEPARTURE_TOLERANCE, DEPARTURE_WINDOW, LIFT_PSI, NOISE_MULTIPLE,
+};
+use super::refine::Refinement;
+use crate::arm::JointAngles;
+use crate::geometry::{Point, Pose};
+use crate::path::PathSample;
+use crate::validate::ValidationLimits;
+
+/// Arc a phase must sweep before its moments give a provisional circle
+/// [rad]: below it the radius of a 0.1 mm-noisy arc is uncertain by
+/// centimetres.
+pub const PROVISIONAL_ARC: f64 = 0.3;
+/// Relative 3σ precision of the radius a provisional upper arm needs: a
+/// few points just after the split fit a small, confident-looking circle
+/// with a large arc; its radius is uncertain by more than this.
+pub const PROVISIONAL_PRECISION: f64 = 0.05;
+/// Fewest samples in a provisional fit.
+pub const PROVISIONAL_SAMPLES: usize = 20;
+
+// The departure flags of one window are the bits of a u64.
+const _: () = assert!(DEPARTURE_WINDOW <= 64);
+/// Where the online estimation is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub enum OnlinePhase {
+    /// Arm at rest, no lift-off yet.
+    Resting,
+    /// Forearm turning about the resting elbow.
+    Forearm,
+    /// Upper arm turning about the shoulder.
+    UpperArm,
+}
+
+/// The worst case of the person's joint angles at a pose under the
+/// provisional model [rad].
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct JointEnvelope {
+    /// Largest shoulder elevation q1 the model allows.
+    pub max_shoulder_elevation: f64,
+    /// Smallest elbow flexion q2 (most hyperextended) the model allows.
+    pub min_elbow_flexion: f64,
+}
+
+/// The phases found and the provisional fits, updated per sample.
+///
+/// # Invariants
+/// `lift <= forearm_added <= forearm_end <= upper_arm_added` once each is
+/// set; every index is below the recorded path's length.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OnlineEstimator {
+    phase: OnlinePhase,
+    lift: usize,
+    lift_psi: f64,
+    max_psi: f64,
+    forearm_moments: CircleMoments,
+    forearm_added: usize,
+    departures: u64,
+    judged: usize,
+    forearm_end: usize,
+    forearm: Option<MomentFit>,
+    upper_arm_moments: CircleMoments,
+    upper_arm_added: usize,
+    first_elbow: Point,
+    last_elbow: Point,
+    upper_arm: Option<MomentFit>,
+    upper_arm_arc: f64,
+}
+
+impl Default for OnlineEstimator {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl OnlineEstimator {
+    /// Nothing recorded.
+    pub const fn new() -> Self {
+        Self {
+            phase: OnlinePhase::Resting,
+            lift: 0,
+            lift_psi: 0.0,
+            max_psi: 0.0,
+            forearm_moments: CircleMoments::new(),
+            forearm_added: 0,
+            departures: 0,
+            judged: 0,
+            forearm_end: 0,
+            forearm: None,
+            upper_arm_moments: CircleMoments::new(),
+            upper_arm_added: 0,
+            first_elbow: Point::new(0.0, 0.0),
+            last_elbow: Point::new(0.0, 0.0),
+            upper_arm: None,
+            upper_arm_arc: 0.0,
+        }
+    }
+
+    /// The phase reached.
+    pub fn phase(&self) -> OnlinePhase {
+        self.phase
+    }
+
+    /// Path index of lift-off and of the forearm phase's end (the upper
+    /// arm's first sample); meaningful once the phase is reached.
+    pub fn split(&self) -> (usize, usize) {
+        (self.lift, self.forearm_end)
+    }
+
+    /// The provisional forearm: l2 = radius, resting elbow = centre.
+    pub fn forearm(&self) -> Option<&MomentFit> {
+        self.forearm.as_ref()
+    }
+
+    /// The provisional upper arm (l1 = radius, shoulder = centre), once it
+    /// has swept [`PROVISIONAL_ARC`] and its radius is known to
+    /// [`PROVISIONAL_PRECISION`] (3σ).
+    pub fn upper_arm(&self) -> Option<&MomentFit> {
+        self.upper_arm.as_ref().filter(|fit| {
+            self.upper_arm_arc >= PROVISIONAL_ARC
+                && 3.0 * fit.radius_sd <= PROVISIONAL_PRECISION * fit.circle.radius
+        })
+    }
+
+    /// Arc swept so far by the forearm (psi above lift-off) and by the upper
+    /// arm about its provisional shoulder [rad].
+    pub fn arcs(&self) -> (f64, f64) {
+        (self.max_psi - self.lift_psi, self.upper_arm_arc)
+    }
+
+    /// Updates the estimation with the last sample of `path`.
+    pub fn record(&mut self, path: &[PathSample]) {
+        let Some((index, sample)) = path.len().checked_sub(1).zip(path.last()) else {
+            return;
+        };
+        if !(sample.pose.is_finite() && sample.wrench.is_finite()) {
+            return;
+        }
+        match self.phase {
+            OnlinePhase::Resting => {
+                if sample.pose.psi > LIFT_PSI {
+                    self.phase = OnlinePhase::Forearm;
+                    self.lift = index;
+                    self.lift_psi = sample.pose.psi;
+                    self.max_psi = sample.pose.psi;
+                    self.forearm_added = index;
+                }
+            }
+            OnlinePhase::Forearm => self.record_forearm(path, index, sample),
+            OnlinePhase::UpperArm => {
+                self.add_elbow(path, index);
+                self.update_upper_arm();
+            }
+        }
+    }
+
+    fn record_forearm(&mut self, path: &[PathSample], index: usize, sample: &PathSample) {
+        self.max_psi = self.max_psi.max(sample.pose.psi);
+        // The moments lag the newest sample by the departure window.
+        if self.forearm_added + DEPARTURE_WINDOW <= index {
+            if let Some(old) = path.get(self.forearm_added) {
+                self.forearm_moments.add(old.pose.point());
+            }
+            self.forearm_added += 1;
+        }
+        let swept = self.max_psi - self.lift_psi >= PROVISIONAL_ARC;
+        if swept && self.forearm_moments.count() >= PROVISIONAL_SAMPLES {
+            if let Ok(fit) = self.forearm_moments.fit() {
+                self.forearm = Some(fit);
+            }
+        }
+        let Some(fit) = self.forearm else {
+            return;
+        };
+        let tolerance = DEPARTURE_TOLERANCE.max(NOISE_MULTIPLE * fit.rms_residual);
+        let residual =
+            libm::fabs(sample.pose.point().distance(fit.circle.centre) - fit.circle.radius);
+        // NaN counts as departed.
+        let within = residual <= tolerance;
+        self.departures = (self.departures << 1) | u64::from(!within);
+        self.judged = self.judged.saturating_add(1);
+        let window_mask = (1u64 << DEPARTURE_WINDOW) - 1;
+        let flagged = (self.departures & window_mask).count_ones() as usize;
+        if self.judged >= DEPARTURE_WINDOW && flagged * 100 >= DEPARTURE_WINDOW * DEPARTURE_PERCENT
+        {
+            self.forearm_end = (index + 1)
+                .saturating_sub(DEPARTURE_WINDOW)
+                .max(self.forearm_added);
+            self.phase = OnlinePhase::UpperArm;
+            self.upper_arm_added = self.forearm_end;
+            // Catch up on the window: at most DEPARTURE_WINDOW points.
+            for _ in 0..DEPARTURE_WINDOW {
+                if self.upper_arm_added > index {
+                    break;
+                }
+                self.add_elbow(path, self.upper_arm_added);
+            }
+            self.update_upper_arm();
+        }
+    }
+
+    /// Adds the elbow point of `path[index]` under the provisional forearm.
+    fn add_elbow(&mut self, path: &[PathSample], index: usize) {
+        let (Some(forearm), Some(sample)) = (self.forearm, path.get(index)) else {
+            return;
+        };
+        let elbow = elbow_point(sample.pose, forearm.circle.radius);
+        if self.upper_arm_moments.count() == 0 {
+            self.first_elbow = elbow;
+        }
+        if self.upper_arm_moments.add(elbow) {
+            self.last_elbow = elbow;
+        }
+        self.upper_arm_added = index + 1;
+    }
+
+    fn update_upper_arm(&mut self) {
+        if self.upper_arm_moments.count() < PROVISIONAL_SAMPLES {
+            return;
+        }
+        if let Ok(fit) = self.upper_arm_moments.fit() {
+            self.upper_arm = Some(fit);
+            self.upper_arm_arc =
+                angle_between(fit.circle.centre, self.first_elbow, self.last_elbow);
+        }
+    }
+
+    /// The refinement of this estimate over a path of `path_len` samples,
+    /// once the upper-arm phase has begun.
+    pub fn refinement(&self, path_len: usize) -> Option<Refinement> {
+        let forearm = self.forearm?;
+        (self.phase == OnlinePhase::UpperArm)
+            .then(|| Refinement::new(forearm.circle, self.lift..self.forearm_end, path_len))
+    }
+
+    /// Worst-case joint angles at measured or commanded pose `pose` under
+    /// the provisional model, with the prior l1 range of `prior`; `None`
+    /// before a provisional forearm exists or for a non-finite pose.
+    pub fn joint_envelope(&self, pose: Pose, prior: &ValidationLimits) -> Option<JointEnvelope> {
+        let forearm = self.forearm?;
+        if !pose.is_finite() {
+            return None;
+        }
+        let elbow = elbow_point(pose, forearm.circle.radius);
+        let shoulder_elevation =
+            |shoulder: Point| libm::atan2(elbow.z - shoulder.z, shoulder.x - elbow.x);
+        let plausible = |fit: &&MomentFit| {
+            (prior.min_upper_arm_length..=prior.max_upper_arm_length).contains(&fit.circle.radius)
+        };
+        let max_q1 = match self.upper_arm().filter(plausible) {
+            Some(upper) => {
+                let shoulder = upper.circle.centre;
+                let reach = elbow.distance(shoulder).max(f64::EPSILON);
+                let spread = 3.0 * (upper.centre_sd + forearm.radius_sd) / reach;
+                shoulder_elevation(shoulder) + spread
+            }
+            None => {
+                let resting = forearm.circle.centre;
+                let near = Point::new(resting.x + prior.min_upper_arm_length, resting.z);
+                let far = Point::new(resting.x + prior.max_upper_arm_length, resting.z);
+                shoulder_elevation(near).max(shoulder_elevation(far))
+            }
+        };
+        let q = JointAngles {
+            shoulder_elevation: max_q1,
+            elbow_flexion: pose.psi - max_q1,
+        };
+        q.is_finite().then_some(JointEnvelope {
+            max_shoulder_elevation: q.shoulder_elevation,
+            min_elbow_flexion: q.elbow_flexion,
+        })
+    }
+}
+
+/// The elbow implied by grasp pose `pose` and forearm length `forearm`
+/// (eq. 19-21, frame S): E = G + l2 (cos psi, −sin psi).
+pub fn elbow_point(pose: Pose, forearm: f64) -> Point {
+    Point::new(
+        pose.x + forearm * libm::cos(pose.psi),
+        pose.z - forearm * libm::sin(pose.psi),
+    )
+}
+
+/// Unsigned angle between `a` and `b` seen from `centre` [rad, 0..π].
+pub fn angle_between(centre: Point, a: Point, b: Point) -> f64 {
+    let (ax, az) = (a.x - centre.x, a.z - centre.z);
+    let (bx, bz) = (b.x - centre.x, b.z - centre.z);
+    libm::fabs(libm::atan2(ax * bz - az * bx, ax * bx + az * bz))
+}

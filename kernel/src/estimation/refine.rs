@@ -1,0 +1,347 @@
+//! The concluding refinement of the online estimate, in bounded slices:
+//! run while the arm is held still, at most [`SAMPLES_PER_STEP`] path
+//! samples per kernel step.
+//!
+//! # Theory of operation
+//! Starting from the online Kåsa circles ([`super::online`]), the
+//! refinement makes fixed passes over the recorded phases:
+//! 1. [`ITERATIONS`] Gauss-Newton passes of the geometric circle fit
+//!    (minimising Σ wᵢ (|pᵢ − c| − r)², Cauchy weights wᵢ with a scale of
+//!    [`SCALE_MULTIPLE`] × the previous pass's RMS residual, at least
+//!    [`MIN_SCALE`]) on the forearm phase's grasp points: l2, resting elbow;
+//! 2. one pass of Kåsa moments of the upper-arm phase's elbow points under
+//!    the refined l2 (the algebraic answer, and the start of step 3);
+//! 3. [`ITERATIONS`] Gauss-Newton passes on those elbow points: l1,
+//!    shoulder;
+//! 4. one evidence pass per phase: RMS geometric residual and the arc
+//!    between its first and last point.
+//!
+//! `method_disagreement` is the largest difference in l1 or l2 between the
+//! algebraic (Kåsa) and the geometric answer: on a circle both agree to
+//! noise, on a path that is no circle (a slip, a moving shoulder) they part.
+//!
+//! # Bounds
+//! A pass costs about 60 flops, one square root and (elbow points) one
+//! sine and cosine per sample; a call does at most `budget` samples and at
+//! most one 3 × 3 solve. A whole refinement is 2 · [`ITERATIONS`] + 3 passes.
+
+use super::circle::{Circle, CircleFitError};
+use super::moments::CircleMoments;
+use super::online::{angle_between, elbow_point};
+use super::{ArmEstimate, EstimateError, FitEvidence, Method};
+use crate::geometry::Point;
+use crate::path::PathSample;
+use core::ops::Range;
+use nalgebra::{Matrix3, Vector3};
+
+/// Gauss-Newton passes per circle.
+pub const ITERATIONS: usize = 5;
+/// Path samples a kernel step may process. At ≈ 100 flops each this is
+/// ≈ 6 400 flops per step (measured: `cargo bench -p limb-kernel --bench
+/// estimators`, "conclusion step").
+pub const SAMPLES_PER_STEP: usize = 64;
+/// Cauchy scale as a multiple of the previous pass's RMS residual.
+pub const SCALE_MULTIPLE: f64 = 3.0;
+/// Smallest Cauchy scale [m]: 3 × the position noise of `plant.md`.
+pub const MIN_SCALE: f64 = 0.3e-3;
+
+/// Which pass is running.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub enum Pass {
+    /// Geometric fit of the forearm phase, iteration `0..ITERATIONS`.
+    Forearm(usize),
+    /// Kåsa moments of the upper-arm phase's elbow points.
+    UpperArmMoments,
+    /// Geometric fit of the upper-arm phase, iteration `0..ITERATIONS`.
+    UpperArm(usize),
+    /// Residual and arc of the forearm phase.
+    ForearmEvidence,
+    /// Residual and arc of the upper-arm phase.
+    UpperArmEvidence,
+    /// Finished (or failed).
+    Done,
+}
+
+/// Weighted Gauss-Newton sums of one pass, with the evidence of the phase.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct PassSums {
+    normal: [f64; 6],
+    gradient: [f64; 3],
+    weighted_squares: f64,
+    weights: f64,
+    squares: f64,
+    count: usize,
+    first: Option<Point>,
+    last: Point,
+}
+
+impl PassSums {
+    fn add(&mut self, circle: &Circle, scale: f64, point: Point) {
+        let dx = point.x - circle.centre.x;
+        let dz = point.z - circle.centre.z;
+        let distance = libm::hypot(dx, dz);
+        if !(distance.is_finite() && distance > 0.0) {
+            return;
+        }
+        let residual = distance - circle.radius;
+        let weight = 1.0 / (1.0 + (residual / scale) * (residual / scale));
+        let j = [-dx / distance, -dz / distance, -1.0];
+        let n = &mut self.normal;
+        n[0] += weight * j[0] * j[0];
+        n[1] += weight * j[0] * j[1];
+        n[2] += weight * j[0] * j[2];
+        n[3] += weight * j[1] * j[1];
+        n[4] += weight * j[1] * j[2];
+        n[5] += weight * j[2] * j[2];
+        for (g, jk) in self.gradient.iter_mut().zip(j) {
+            *g += weight * jk * residual;
+        }
+        self.weighted_squares += weight * residual * residual;
+        self.weights += weight;
+        self.squares += residual * residual;
+        self.count += 1;
+        self.first.get_or_insert(point);
+        self.last = point;
+    }
+
+    /// The circle after one Gauss-Newton step from `circle`.
+    fn step(&self, circle: &Circle) -> Result<Circle, CircleFitError> {
+        let n = &self.normal;
+        let normal = Matrix3::new(n[0], n[1], n[2], n[1], n[3], n[4], n[2], n[4], n[5]);
+        let delta = normal.try_inverse().ok_or(CircleFitError::Degenerate)?
+            * -Vector3::new(self.gradient[0], self.gradient[1], self.gradient[2]);
+        let next = Circle {
+            centre: Point::new(circle.centre.x + delta[0], circle.centre.z + delta[1]),
+            radius: circle.radius + delta[2],
+        };
+        if next.is_valid() {
+            Ok(next)
+        } else {
+            Err(CircleFitError::NonFinite)
+        }
+    }
+
+    fn rms(&self) -> f64 {
+        if self.count == 0 {
+            0.0
+        } else {
+            libm::sqrt(self.squares / self.count as f64)
+        }
+    }
+
+    fn weighted_rms(&self) -> f64 {
+        if self.weights > 0.0 {
+            libm::sqrt(self.weighted_squares / self.weights)
+        } else {
+            f64::INFINITY
+        }
+    }
+}
+
+/// Outcome of one slice of work.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Progress {
+    /// More passes to run.
+    Running(Pass),
+    /// The refined, unvalidated estimate, or why there is none.
+    Done(Result<ArmEstimate, EstimateError>),
+}
+
+/// A refinement in progress.
+///
+/// # Invariants
+/// `cursor` lies in the range of the running pass; the circles are valid.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Refinement {
+    forearm_range: (usize, usize),
+    upper_arm_range: (usize, usize),
+    pass: Pass,
+    cursor: usize,
+    sums: PassSums,
+    scale: f64,
+    moments: CircleMoments,
+    forearm_kasa: Circle,
+    forearm: Circle,
+    upper_arm_kasa: Circle,
+    upper_arm: Circle,
+    forearm_evidence: (f64, f64),
+    outcome: Option<Result<ArmEstimate, EstimateError>>,
+}
+
+impl Refinement {
+    /// Starts from the online forearm circle over `forearm` and the phase
+    /// split; the upper-arm phase runs from `forearm.end` to `path_len`.
+    pub fn new(forearm_circle: Circle, forearm: Range<usize>, path_len: usize) -> Self {
+        Self {
+            forearm_range: (forearm.start, forearm.end),
+            upper_arm_range: (forearm.end, path_len.max(forearm.end)),
+            pass: Pass::Forearm(0),
+            cursor: 0,
+            sums: PassSums::default(),
+            scale: f64::INFINITY,
+            moments: CircleMoments::new(),
+            forearm_kasa: forearm_circle,
+            forearm: forearm_circle,
+            upper_arm_kasa: forearm_circle,
+            upper_arm: forearm_circle,
+            forearm_evidence: (0.0, 0.0),
+            outcome: None,
+        }
+    }
+
+    /// The pass running now.
+    pub fn pass(&self) -> Pass {
+        self.pass
+    }
+
+    /// Processes at most `budget` samples of `path` (the recorded path the
+    /// online estimate was made from) and at most one pass end.
+    pub fn advance(&mut self, path: &[PathSample], budget: usize) -> Progress {
+        if let Some(outcome) = self.outcome {
+            return Progress::Done(outcome);
+        }
+        let range = match self.pass {
+            Pass::Forearm(_) | Pass::ForearmEvidence => span(self.forearm_range),
+            Pass::UpperArmMoments | Pass::UpperArm(_) | Pass::UpperArmEvidence => {
+                span(self.upper_arm_range)
+            }
+            Pass::Done => return self.finish(Err(EstimateError::UpperArmPhaseTooShort)),
+        };
+        let start = range.start.saturating_add(self.cursor);
+        let end = start.saturating_add(budget).min(range.end);
+        for index in start..end {
+            let Some(sample) = path.get(index) else {
+                return self.finish(Err(EstimateError::PathTooLong));
+            };
+            match self.pass {
+                Pass::Forearm(_) => self
+                    .sums
+                    .add(&self.forearm, self.scale, sample.pose.point()),
+                Pass::ForearmEvidence => {
+                    self.sums
+                        .add(&self.forearm, f64::INFINITY, sample.pose.point())
+                }
+                Pass::UpperArmMoments => {
+                    self.moments
+                        .add(elbow_point(sample.pose, self.forearm.radius));
+                }
+                Pass::UpperArm(_) => {
+                    let elbow = elbow_point(sample.pose, self.forearm.radius);
+                    self.sums.add(&self.upper_arm, self.scale, elbow);
+                }
+                Pass::UpperArmEvidence => {
+                    let elbow = elbow_point(sample.pose, self.forearm.radius);
+                    self.sums.add(&self.upper_arm, f64::INFINITY, elbow);
+                }
+                Pass::Done => {}
+            }
+        }
+        self.cursor = end - range.start;
+        if end < range.end {
+            return Progress::Running(self.pass);
+        }
+        match self.end_pass(range.len()) {
+            Ok(pass) => {
+                self.pass = pass;
+                self.cursor = 0;
+                self.sums = PassSums::default();
+                Progress::Running(pass)
+            }
+            Err(error) => self.finish(Err(error)),
+        }
+    }
+
+    /// Concludes the pass that just covered all of its `samples`; returns
+    /// the next one (or the estimate).
+    fn end_pass(&mut self, samples: usize) -> Result<Pass, EstimateError> {
+        let too_short = |pass: Pass| match pass {
+            Pass::Forearm(_) | Pass::ForearmEvidence => EstimateError::ForearmPhaseTooShort,
+            _ => EstimateError::UpperArmPhaseTooShort,
+        };
+        if samples < super::MIN_PHASE_SAMPLES {
+            return Err(too_short(self.pass));
+        }
+        Ok(match self.pass {
+            Pass::Forearm(iteration) => {
+                self.forearm = self
+                    .sums
+                    .step(&self.forearm)
+                    .map_err(EstimateError::ForearmFit)?;
+                self.scale = (SCALE_MULTIPLE * self.sums.weighted_rms()).max(MIN_SCALE);
+                if iteration + 1 < ITERATIONS {
+                    Pass::Forearm(iteration + 1)
+                } else {
+                    Pass::UpperArmMoments
+                }
+            }
+            Pass::UpperArmMoments => {
+                let fit = self.moments.fit().map_err(EstimateError::UpperArmFit)?;
+                self.upper_arm_kasa = fit.circle;
+                self.upper_arm = fit.circle;
+                self.scale = f64::INFINITY;
+                Pass::UpperArm(0)
+            }
+            Pass::UpperArm(iteration) => {
+                self.upper_arm = self
+                    .sums
+                    .step(&self.upper_arm)
+                    .map_err(EstimateError::UpperArmFit)?;
+                self.scale = (SCALE_MULTIPLE * self.sums.weighted_rms()).max(MIN_SCALE);
+                if iteration + 1 < ITERATIONS {
+                    Pass::UpperArm(iteration + 1)
+                } else {
+                    Pass::ForearmEvidence
+                }
+            }
+            Pass::ForearmEvidence => {
+                self.forearm_evidence = (self.phase_arc(&self.forearm), self.sums.rms());
+                Pass::UpperArmEvidence
+            }
+            Pass::UpperArmEvidence => {
+                let estimate = self.estimate(self.phase_arc(&self.upper_arm), self.sums.rms());
+                self.outcome = Some(Ok(estimate));
+                Pass::Done
+            }
+            Pass::Done => Pass::Done,
+        })
+    }
+
+    fn phase_arc(&self, circle: &Circle) -> f64 {
+        self.sums.first.map_or(0.0, |first| {
+            angle_between(circle.centre, first, self.sums.last)
+        })
+    }
+
+    fn estimate(&self, upper_arm_arc: f64, upper_arm_residual: f64) -> ArmEstimate {
+        let disagreement = libm::fabs(self.forearm.radius - self.forearm_kasa.radius).max(
+            libm::fabs(self.upper_arm.radius - self.upper_arm_kasa.radius),
+        );
+        ArmEstimate {
+            upper_arm_length: self.upper_arm.radius,
+            forearm_length: self.forearm.radius,
+            elbow: self.forearm.centre,
+            shoulder: self.upper_arm.centre,
+            method: Method::Online,
+            evidence: FitEvidence {
+                forearm_arc: self.forearm_evidence.0,
+                upper_arm_arc,
+                forearm_residual: self.forearm_evidence.1,
+                upper_arm_residual,
+                method_disagreement: Some(disagreement),
+                forearm_samples: span(self.forearm_range).len(),
+                upper_arm_samples: span(self.upper_arm_range).len(),
+            },
+        }
+    }
+
+    fn finish(&mut self, outcome: Result<ArmEstimate, EstimateError>) -> Progress {
+        self.pass = Pass::Done;
+        self.outcome = Some(outcome);
+        Progress::Done(outcome)
+    }
+}
+
+fn span((start, end): (usize, usize)) -> Range<usize> {
+    start..end.max(start)
+}

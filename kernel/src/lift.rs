@@ -1,0 +1,389 @@
+//! The estimation lift, shaped online by the provisional arm model so that
+//! the person's joints stay inside their limits (HAZ-08), and ended as soon
+//! as the arcs suffice.
+//!
+//! # Theory of operation
+//! The lift follows the planned [`EstimationMotion`] (plant.md eq. 3) on its
+//! own clock, which advances only while [`LiftPhase::Lifting`]:
+//!
+//! ```text
+//!            no provisional forearm and the set-point
+//!            beyond LiftShaping::prior_reach of the grasp
+//!   Lifting ───────────────────────────────────────────▶ AwaitingForearm
+//!      │   ◀─────────────────────── provisional forearm ────┘ (or, after
+//!      │                                forearm_wait, EstimationFailed)
+//!      │ upper-arm arc ≥ target_arc │ joint envelope within joint_margin of
+//!      │ a limit │ planned lift and its extension (0.1 m on along the same
+//!      │ line, for long arms) complete
+//!      ▼
+//!   Settling (a minimum-jerk move to the holding pose x − f_ext/K at
+//!      │      hold_speed / hold_rate, then held for settle_time; recording)
+//!      ▼
+//!   Concluding (held still; the refinement runs SAMPLES_PER_STEP per step)
+//! ```
+//!
+//! Before any provisional model exists the prior bounds the motion: the
+//! set-point stays within `prior_reach` of the grasp (the elbow rests on the
+//! table while the forearm turns, so no joint can leave its range there).
+//! With a provisional forearm the shoulder is bounded by the validator's
+//! l1 range; with a provisional upper arm by its 3σ uncertainty
+//! ([`crate::estimation::online::OnlineEstimator::joint_envelope`]). The
+//! lift ends when that worst case comes within `joint_margin` of a limit;
+//! the joint-limit monitor stops the kernel if it ever crosses one.
+
+use crate::config::{KernelConfig, SafetyLimits};
+use crate::estimation::online::{JointEnvelope, OnlineEstimator};
+use crate::estimation::refine::Refinement;
+use crate::geometry::Pose;
+use crate::monitor::Limit;
+use crate::motion::{EstimationMotion, MinimumJerkMove, SetPoint};
+use crate::path::PathSample;
+
+/// How the kernel shapes and ends its estimation lift.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct LiftShaping {
+    /// Farthest the set-point may move from the grasp before a provisional
+    /// forearm exists [m]. 0.25 m: the forearm sweeps the
+    /// [`crate::estimation::online::PROVISIONAL_ARC`] with the set-point
+    /// 0.12-0.14 m out on the six arms of `plant.md`.
+    pub prior_reach: f64,
+    /// Longest wait at `prior_reach` for a provisional forearm [s].
+    pub forearm_wait: f64,
+    /// Upper-arm arc that ends the lift [rad]. 0.9 rad: the validator needs
+    /// 0.5 rad; the upper arm then stands ≈ 52° up, far from the limits.
+    pub target_arc: f64,
+    /// Margin kept between the joint envelope and the joint limits [rad].
+    pub joint_margin: f64,
+
+    /// Time the set-point is held after the lift ends, still recording,
+    /// before the conclusion [s].
+    pub settle_time: f64,
+    /// Peak grasp-point speed of the move from the lift's set-point to the
+    /// holding pose [m/s]; the move is ≈ 3 cm (the dynamic part of the
+    /// spring's stretch). A jump would reach a position-controlled robot
+    /// (KUKA joint-position overlay) as a step of the joint targets.
+    pub hold_speed: f64,
+    /// Peak forearm rate of that move [rad/s] (psi's set-point lags the arm
+    /// by up to 0.5 rad at the end of the lift).
+    pub hold_rate: f64,
+    /// How far the lift continues along its line when the planned lift is
+    /// complete before the arcs suffice [m] (long arms).
+    pub extension: f64,
+    /// Shortest duration of that move [s]: a 3 mm move (force noise / K) in
+    /// 56 ms accelerates the set-point at 5.5 m/s², 11 N of inertia
+    /// feed-forward, and tripped the force-rate monitor.
+    pub hold_move_time: f64,
+}
+
+impl Default for LiftShaping {
+    fn default() -> Self {
+        Self {
+            prior_reach: 0.25,
+            forearm_wait: 5.0,
+            target_arc: 0.9,
+            joint_margin: 0.10,
+            settle_time: 1.0,
+            hold_speed: 0.10,
+            hold_rate: 0.5,
+            hold_move_time: 1.0,
+            extension: 0.10,
+        }
+    }
+}
+
+impl LiftShaping {
+    /// True when every value is finite and positive.
+    pub fn is_valid(&self) -> bool {
+        [
+            self.prior_reach,
+            self.forearm_wait,
+            self.target_arc,
+            self.joint_margin,
+            self.settle_time,
+            self.hold_speed,
+            self.hold_rate,
+            self.hold_move_time,
+            self.extension,
+        ]
+        .iter()
+        .all(|v| v.is_finite() && *v > 0.0)
+    }
+}
+
+/// Why the lift ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum LiftEnd {
+    /// The upper arm swept [`LiftShaping::target_arc`].
+    ArcReached,
+    /// The joint envelope came within the margin of this limit.
+    JointMargin(Limit),
+    /// The planned lift and its extension were complete.
+    MotionComplete,
+}
+
+/// Where the lift is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+// No heap (no_std, no alloc): the larger variant (the estimation's running
+// sums, ≈ 1 kB) lives inline; the kernel is one fixed-size value.
+#[allow(clippy::large_enum_variant)]
+pub enum LiftPhase {
+    /// Following the planned lift.
+    Lifting,
+    /// Paused at the prior reach since this time [s].
+    AwaitingForearm {
+        /// Kernel time the pause began [s].
+        since: f64,
+    },
+    /// Moving to the holding pose, then holding it; arm settling, path still
+    /// recorded.
+    Settling {
+        /// Kernel time the lift ended [s].
+        since: f64,
+        /// From the lift's last set-point to the holding pose.
+        to_hold: MinimumJerkMove,
+        /// The holding pose.
+        hold: Pose,
+        /// Why the lift ended.
+        reason: LiftEnd,
+    },
+    /// Held still while the estimate is refined.
+    Concluding {
+        /// The holding pose.
+        hold: Pose,
+        /// Why the lift ended.
+        reason: LiftEnd,
+        /// The refinement in progress.
+        refinement: Refinement,
+    },
+}
+
+/// The shaped lift.
+///
+/// # Invariants
+/// `clock` ∈ [0, duration of `segment`]; it advances only while Lifting.
+/// `segment` is the planned lift, then (once, if `extended`) its extension.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShapedLift {
+    motion: EstimationMotion,
+    segment: MinimumJerkMove,
+    extended: bool,
+    clock: f64,
+    last_now: f64,
+    phase: LiftPhase,
+}
+
+/// What the lift commands this step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LiftCommand {
+    /// Follow this moving set-point.
+    Move(SetPoint),
+    /// Hold this set-point still.
+    Hold(SetPoint),
+}
+
+impl ShapedLift {
+    /// The planned `motion`, started at kernel time `now`.
+    pub fn new(motion: EstimationMotion, now: f64) -> Self {
+        Self {
+            motion,
+            segment: *motion.lift(),
+            extended: false,
+            clock: 0.0,
+            last_now: now,
+            phase: LiftPhase::Lifting,
+        }
+    }
+
+    /// The planned motion.
+    pub fn motion(&self) -> &EstimationMotion {
+        &self.motion
+    }
+
+    /// The phase.
+    pub fn phase(&self) -> &LiftPhase {
+        &self.phase
+    }
+
+    /// Mutable phase, for the conclusion's refinement.
+    pub(crate) fn phase_mut(&mut self) -> &mut LiftPhase {
+        &mut self.phase
+    }
+
+    /// True while the path is still being recorded (not Concluding).
+    pub fn is_recording(&self) -> bool {
+        !matches!(self.phase, LiftPhase::Concluding { .. })
+    }
+
+    /// Advances the lift to kernel time `now` given the online estimate
+    /// (already updated with this step's sample) and the measured `pose`.
+    /// The caller starts the conclusion when [`Self::settled`] says so.
+    ///
+    /// # Errors
+    /// No provisional forearm within `forearm_wait`, or a move that cannot
+    /// be planned (non-finite).
+    pub fn advance(
+        &mut self,
+        now: f64,
+        frame: &PathSample,
+        online: &OnlineEstimator,
+        config: &KernelConfig,
+    ) -> Result<LiftCommand, crate::estimation::EstimateError> {
+        let shaping = &config.lift_shaping;
+        let dt = if now > self.last_now {
+            now - self.last_now
+        } else {
+            0.0
+        };
+        self.last_now = self.last_now.max(now);
+        match self.phase {
+            LiftPhase::Lifting => {
+                let duration = self.segment.duration();
+                let next = (self.clock + dt).min(duration);
+                let set_point = self.segment.at(next);
+                let start = self.motion.lift().start().point();
+                if online.forearm().is_none()
+                    && set_point.pose.point().distance(start) > shaping.prior_reach
+                {
+                    self.phase = LiftPhase::AwaitingForearm { since: now };
+                    return Ok(LiftCommand::Hold(SetPoint::hold(
+                        self.segment.at(self.clock).pose,
+                    )));
+                }
+                self.clock = next;
+                let envelope = online.joint_envelope(frame.pose, &config.validation);
+                let mut reason = end_reason(online, envelope, shaping, &config.limits);
+                if reason.is_none() && next >= duration {
+                    if self.extended {
+                        reason = Some(LiftEnd::MotionComplete);
+                    } else {
+                        self.extend(config)?;
+                    }
+                }
+                match reason {
+                    Some(reason) => {
+                        let hold = holding_pose(frame, &config.impedance.stiffness);
+                        let to_hold = MinimumJerkMove::bounded(
+                            set_point.pose,
+                            hold,
+                            shaping.hold_speed,
+                            shaping.hold_rate,
+                            shaping.hold_move_time,
+                        )
+                        .map_err(|_| crate::estimation::EstimateError::NonFiniteSample)?;
+                        self.phase = LiftPhase::Settling {
+                            since: now,
+                            to_hold,
+                            hold,
+                            reason,
+                        };
+                        Ok(LiftCommand::Move(to_hold.at(0.0)))
+                    }
+                    None => Ok(LiftCommand::Move(set_point)),
+                }
+            }
+            LiftPhase::AwaitingForearm { since } => {
+                if online.forearm().is_some() {
+                    self.phase = LiftPhase::Lifting;
+                } else if now - since > shaping.forearm_wait {
+                    return Err(crate::estimation::EstimateError::ForearmPhaseTooShort);
+                }
+                Ok(LiftCommand::Hold(SetPoint::hold(
+                    self.motion.at(self.clock).pose,
+                )))
+            }
+            LiftPhase::Settling { since, to_hold, .. } if now - since < to_hold.duration() => {
+                Ok(LiftCommand::Move(to_hold.at(now - since)))
+            }
+            LiftPhase::Settling { hold, .. } | LiftPhase::Concluding { hold, .. } => {
+                Ok(LiftCommand::Hold(SetPoint::hold(hold)))
+            }
+        }
+    }
+
+    /// Continues the completed lift along its line by
+    /// [`LiftShaping::extension`] at the lift's peak speed (long arms sweep
+    /// too little upper-arm arc on plant.md's lift: 0.64 rad for l1 0.38 m,
+    /// l2 0.26 m).
+    fn extend(&mut self, config: &KernelConfig) -> Result<(), crate::estimation::EstimateError> {
+        let start = self.segment.start();
+        let goal = self.segment.goal();
+        let (dx, dz) = (goal.x - start.x, goal.z - start.z);
+        let length = libm::hypot(dx, dz);
+        let reach = config.lift_shaping.extension / length.max(f64::EPSILON);
+        let extended = Pose::new(goal.x + reach * dx, goal.z + reach * dz, goal.psi);
+        self.segment = MinimumJerkMove::new(goal, extended, config.estimation_motion.peak_speed)
+            .map_err(|_| crate::estimation::EstimateError::NonFiniteSample)?;
+        self.clock = 0.0;
+        self.extended = true;
+        Ok(())
+    }
+
+    /// When the holding pose has been reached and held for `settle_time` at
+    /// `now`: the pose and why the lift ended.
+    pub fn settled(&self, now: f64, settle_time: f64) -> Option<(Pose, LiftEnd)> {
+        match self.phase {
+            LiftPhase::Settling {
+                since,
+                to_hold,
+                hold,
+                reason,
+            } if now - since >= to_hold.duration() + settle_time => Some((hold, reason)),
+            _ => None,
+        }
+    }
+
+    /// Why the lift ended, once it has.
+    pub fn ended(&self) -> Option<LiftEnd> {
+        match self.phase {
+            LiftPhase::Settling { reason, .. } | LiftPhase::Concluding { reason, .. } => {
+                Some(reason)
+            }
+            _ => None,
+        }
+    }
+
+    /// The pose held once the lift has ended.
+    pub fn hold(&self) -> Option<Pose> {
+        match self.phase {
+            LiftPhase::Settling { hold, .. } | LiftPhase::Concluding { hold, .. } => Some(hold),
+            _ => None,
+        }
+    }
+}
+
+/// The set-point that holds the arm where `frame` measured it: the
+/// measured pose moved by the wrench the robot applies now over the
+/// stiffness, x_d = x + F/K = x − f_ext/K, so the spring keeps carrying the
+/// arm's weight. The lift's own set-point leads the arm by up to 0.15 m;
+/// frozen there it would pull the arm on past its limits.
+fn holding_pose(frame: &PathSample, stiffness: &[f64; 3]) -> Pose {
+    let w = frame.wrench;
+    Pose::new(
+        frame.pose.x - w.fx / stiffness[0],
+        frame.pose.z - w.fz / stiffness[1],
+        frame.pose.psi - w.ty / stiffness[2],
+    )
+}
+
+/// Why the lift must end now, if it must.
+fn end_reason(
+    online: &OnlineEstimator,
+    envelope: Option<JointEnvelope>,
+    shaping: &LiftShaping,
+    limits: &SafetyLimits,
+) -> Option<LiftEnd> {
+    if let Some(envelope) = envelope {
+        if envelope.min_elbow_flexion <= limits.elbow_flexion.low + shaping.joint_margin {
+            return Some(LiftEnd::JointMargin(Limit::ElbowFlexion));
+        }
+        if envelope.max_shoulder_elevation >= limits.shoulder_elevation.high - shaping.joint_margin
+        {
+            return Some(LiftEnd::JointMargin(Limit::ShoulderElevation));
+        }
+    }
+    let (_, upper_arm_arc) = online.arcs();
+    (online.upper_arm().is_some() && upper_arm_arc >= shaping.target_arc)
+        .then_some(LiftEnd::ArcReached)
+}
