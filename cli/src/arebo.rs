@@ -4,22 +4,27 @@
 //!   (calibration, joint-angle accuracy, adaptive weight support); JSON.
 //! * `limb arebo serve [--seconds S]`: a simulated AREBO on a pseudo-terminal;
 //!   prints the device path, then serves for S seconds.
-//! * `limb arebo calibrate --device PATH`: records 15 s of flexion/extension
-//!   and 15 s of small random movements, fits and validates the arm model;
-//!   JSON.
-//! * `limb arebo run --device PATH [--seconds S] [--alpha A]`: calibrates,
-//!   then runs the supervisor (unassisted, or weight support with α = A),
-//!   sending the torque target each frame; stale data or a limit stops it;
+//! * `limb arebo calibrate --device PATH [--backlash-deg B]`: with the robot
+//!   gravity compensated, records 15 s of flexion/extension and 15 s of
+//!   small random movements, fits and validates the arm model; JSON.
+//! * `limb arebo run --device PATH [--seconds S] [--alpha A] [--backlash-deg B]`:
+//!   calibrates, then runs the supervisor (unassisted, or weight support
+//!   with α = A) in torque mode, sending the torque target each frame;
 //!   JSON summary.
+//!
+//! A safe stop (stale data, a limit, a device error or status bit, a port
+//! failure) commands the motors off, prints the JSON with a `stop` object
+//! (cause, stable code, value, bound) and exits 3, in both `calibrate` and
+//! `run`.
 
 use crate::error::{print_json, CliError};
 use clap::Subcommand;
-use limb_arebo::calibration::{self, CalibrationLimits, PlaneFit, SphereFit, ValidatedArmModel};
+use limb_arebo::calibration::{ValidatedArmModel, CALIBRATION_PHASE};
 use limb_arebo::control::{GravityParameters, Mode};
-use limb_arebo::encoder::{BacklashCompensator, NOMINAL_BACKLASH};
 use limb_arebo::human::ArmMass;
-use limb_arebo::link::{self, FaultSwitch, Session, SessionState};
-use limb_arebo::protocol::{Command, ControlType, Telemetry};
+use limb_arebo::link::{self, FaultSwitch, Session, SessionState, StopCause};
+use limb_arebo::protocol::{Command, ControlType};
+use limb_arebo::recording::{self, Calibration, CalibrationError, CalibrationSettings};
 use limb_arebo::safety::SafetyLimits;
 use limb_arebo::sim;
 use limb_arebo::supervisor::{Output, Sample, Supervisor};
@@ -47,6 +52,9 @@ pub enum AreboCommand {
         /// Serial device path (e.g. /dev/ttyACM0 or a pty from `serve`).
         #[arg(long)]
         device: PathBuf,
+        /// Gearbox play compensated on θ1..θ3 [deg] (0: a robot without play).
+        #[arg(long, default_value_t = 1.0)]
+        backlash_deg: f64,
     },
     /// Calibrate, then run the supervisor (unassisted or weight support).
     Run {
@@ -59,6 +67,9 @@ pub enum AreboCommand {
         /// De-weighting α (0: unassisted mode).
         #[arg(long, default_value_t = 0.0)]
         alpha: f64,
+        /// Gearbox play compensated on θ1..θ3 [deg] (0: a robot without play).
+        #[arg(long, default_value_t = 1.0)]
+        backlash_deg: f64,
     },
 }
 
@@ -67,12 +78,16 @@ pub fn run(command: AreboCommand) -> Result<(), CliError> {
     match command {
         AreboCommand::Sim { seed } => simulate(seed),
         AreboCommand::Serve { seconds } => serve(seconds),
-        AreboCommand::Calibrate { device } => calibrate(&device),
+        AreboCommand::Calibrate {
+            device,
+            backlash_deg,
+        } => calibrate(&device, backlash_deg),
         AreboCommand::Run {
             device,
             seconds,
             alpha,
-        } => stream(&device, seconds, alpha),
+            backlash_deg,
+        } => stream(&device, seconds, alpha, backlash_deg),
     }
 }
 
@@ -109,11 +124,11 @@ fn serve(seconds: f64) -> Result<(), CliError> {
     let pty = link::pseudo_terminal().map_err(|e| CliError::Internal(e.to_string()))?;
     let device = pty
         .device
-        .try_clone()
+        .try_clone_native()
         .map_err(|e| CliError::Internal(e.to_string()))?;
     let small = sim::sphere_calibration(1);
     let motion = sim::accuracy_motion(2);
-    let phase = sim::CALIBRATION_PHASE;
+    let phase = CALIBRATION_PHASE;
     let trajectory = Box::new(move |t: f64| {
         if t < phase {
             sim::flexion_calibration(t)
@@ -145,42 +160,54 @@ fn open(device: &Path) -> Result<Session, CliError> {
         .map_err(|e| CliError::BadInput(format!("{}: {e}", device.display())))
 }
 
-/// Polls until `count` frames or a safe stop.
-fn collect(session: &mut Session, count: usize) -> Result<Vec<Telemetry>, CliError> {
-    let mut frames = Vec::with_capacity(count);
-    while frames.len() < count {
-        frames.extend(session.poll());
-        if let SessionState::SafeStop(cause) = session.state() {
-            return Err(CliError::Internal(format!("safe stop: {cause:?}")));
-        }
+/// The calibration settings of `--backlash-deg`.
+fn settings(backlash_deg: f64) -> Result<CalibrationSettings, CliError> {
+    if !(backlash_deg.is_finite() && backlash_deg >= 0.0) {
+        return Err(CliError::BadInput(format!(
+            "--backlash-deg must be finite and not negative, got {backlash_deg}"
+        )));
     }
-    Ok(frames)
+    Ok(CalibrationSettings {
+        backlash: [backlash_deg.to_radians(); 3],
+        ..CalibrationSettings::default()
+    })
 }
 
-/// Records the two calibration phases on `session` and validates the fits.
+/// A safe stop as JSON: the cause, and for a verdict its stable code,
+/// value and bound.
+fn stop_json(cause: StopCause) -> serde_json::Value {
+    match cause {
+        StopCause::PortLost => json!({ "cause": "port_lost" }),
+        StopCause::Violation(v) => json!({
+            "cause": "violation",
+            "limit": format!("{:?}", v.limit),
+            "code": v.limit.code(),
+            "value": v.value,
+            "bound": v.bound,
+        }),
+    }
+}
+
+/// Prints `summary` with the stop and fails with [`CliError::SafetyStop`]
+/// (exit 3), the same way in `calibrate` and `run`.
+fn stopped(mut summary: serde_json::Value, cause: StopCause) -> Result<(), CliError> {
+    summary["stop"] = stop_json(cause);
+    print_json(&summary)?;
+    Err(CliError::SafetyStop(format!("{cause:?}")))
+}
+
+/// Calibrates on `session`; a safe stop is printed and exits 3.
 fn calibrate_session(
     session: &mut Session,
     device: &Path,
-) -> Result<(ValidatedArmModel, PlaneFit, SphereFit), CliError> {
-    let per_phase = (sim::CALIBRATION_PHASE / sim::SAMPLE_PERIOD) as usize;
-    let frames = collect(session, 2 * per_phase)?;
-    let mut compensator = BacklashCompensator::new(NOMINAL_BACKLASH);
-    // Keep the samples outside the joints' play (see BacklashCompensator).
-    let mut phases = [Vec::new(), Vec::new()];
-    for (n, frame) in frames.iter().enumerate() {
-        let endpoint = sim::endpoint_estimate(&mut compensator, &frame.counts);
-        if compensator.settled() {
-            phases[usize::from(n >= per_phase)].push(endpoint);
-        }
+    settings: &CalibrationSettings,
+) -> Result<Result<Calibration, StopCause>, CliError> {
+    match recording::calibrate(session, settings) {
+        Ok(calibration) => Ok(Ok(calibration)),
+        Err(CalibrationError::Stopped(cause)) => Ok(Err(cause)),
+        Err(CalibrationError::Link(e)) => Err(CliError::Internal(e.to_string())),
+        Err(e) => Err(CliError::BadInput(format!("{}: {e}", device.display()))),
     }
-    let rejected = |what: &str, e: &dyn std::fmt::Debug| {
-        CliError::BadInput(format!("{}: {what}: {e:?}", device.display()))
-    };
-    let plane = calibration::fit_plane(&phases[0]).map_err(|e| rejected("flexion plane", &e))?;
-    let sphere = calibration::fit_sphere(&phases[1]).map_err(|e| rejected("sphere", &e))?;
-    let model = calibration::validate(&plane, &sphere, &CalibrationLimits::default())
-        .map_err(|e| rejected("validation", &e))?;
-    Ok((model, plane, sphere))
 }
 
 fn model_json(model: &ValidatedArmModel) -> serde_json::Value {
@@ -191,17 +218,25 @@ fn model_json(model: &ValidatedArmModel) -> serde_json::Value {
     })
 }
 
-fn calibrate(device: &Path) -> Result<(), CliError> {
+fn calibrate(device: &Path, backlash_deg: f64) -> Result<(), CliError> {
+    let settings = settings(backlash_deg)?;
     let mut session = open(device)?;
-    let (model, plane, sphere) = calibrate_session(&mut session, device)?;
-    print_json(&json!({
-        "model": model_json(&model),
-        "plane_residual_m": plane.residual,
-        "sphere_residual_m": sphere.residual,
-    }))
+    let calibrated = calibrate_session(&mut session, device, &settings)?;
+    // The person lets go of a gravity-compensated robot; then motors off.
+    let _ = session.send(Command::SetControlType(ControlType::Off));
+    match calibrated {
+        Ok(c) => print_json(&json!({
+            "model": model_json(&c.model),
+            "plane_residual_m": c.plane.residual,
+            "sphere_residual_m": c.sphere.residual,
+            "samples": c.samples,
+            "left_out": c.left_out,
+        })),
+        Err(cause) => stopped(json!({ "model": null }), cause),
+    }
 }
 
-fn stream(device: &Path, seconds: f64, alpha: f64) -> Result<(), CliError> {
+fn stream(device: &Path, seconds: f64, alpha: f64, backlash_deg: f64) -> Result<(), CliError> {
     if !(seconds.is_finite() && seconds > 0.0) {
         return Err(CliError::BadInput(format!(
             "--seconds must be positive, got {seconds}"
@@ -212,8 +247,13 @@ fn stream(device: &Path, seconds: f64, alpha: f64) -> Result<(), CliError> {
             "--alpha must be in [0, 1], got {alpha}"
         )));
     }
+    let settings = settings(backlash_deg)?;
     let mut session = open(device)?;
-    let (model, _, _) = calibrate_session(&mut session, device)?;
+    let calibration = match calibrate_session(&mut session, device, &settings)? {
+        Ok(calibration) => calibration,
+        Err(cause) => return stopped(json!({ "model": null, "frames": 0 }), cause),
+    };
+    let model = calibration.model;
     let arm = ArmMass {
         mass: 2.0,
         centre_of_mass: 0.15,
@@ -223,37 +263,44 @@ fn stream(device: &Path, seconds: f64, alpha: f64) -> Result<(), CliError> {
         arm,
         GravityParameters::ASSUMED,
         SafetyLimits::default(),
-        NOMINAL_BACKLASH,
+        settings.backlash,
     );
     let mode = if alpha > 0.0 {
         Mode::WeightSupport { alpha }
     } else {
         Mode::Unassisted
     };
-    let internal = |e: link::LinkError| CliError::Internal(e.to_string());
-    session
-        .send(Command::SetControlType(ControlType::Torque))
-        .map_err(internal)?;
     let end = Instant::now() + Duration::from_secs_f64(seconds);
-    let (mut frames, mut last_angles, mut stop) = (0usize, None, None);
-    while Instant::now() < end && session.state() == SessionState::Running && stop.is_none() {
-        for frame in session.poll() {
+    let (mut frames, mut last_angles, mut verdict) = (0usize, None, None);
+    // A control type the device does not confirm latches the stop.
+    let mut pending = session.set_control(ControlType::Torque).unwrap_or_default();
+    while Instant::now() < end && session.state() == SessionState::Running && verdict.is_none() {
+        let received = if pending.is_empty() {
+            session.poll()
+        } else {
+            std::mem::take(&mut pending)
+        };
+        for frame in received {
             frames += 1;
             let sample = Sample {
-                counts: frame.counts,
-                torques: nalgebra::Vector3::from(frame.torques.map(f64::from)),
-                time: session.now(),
+                status: frame.telemetry.status,
+                error: frame.telemetry.error,
+                counts: frame.telemetry.counts,
+                torques: nalgebra::Vector3::from(frame.telemetry.torques.map(f64::from)),
+                time: frame.time,
             };
             match supervisor.step(Some(&sample), session.now(), mode) {
                 Output::Target { desired, angles } => {
                     last_angles = Some(angles);
                     let target = [desired.x as f32, desired.y as f32, desired.z as f32];
-                    session
-                        .send(Command::SetControlTarget(target))
-                        .map_err(internal)?;
+                    // A failed write latches the session's stop (motors off).
+                    if session.send(Command::SetControlTarget(target)).is_err() {
+                        break;
+                    }
                 }
                 Output::SafeStop(violation) => {
-                    stop = Some(violation);
+                    session.stop(StopCause::Violation(violation));
+                    verdict = Some(violation);
                     break;
                 }
             }
@@ -261,13 +308,16 @@ fn stream(device: &Path, seconds: f64, alpha: f64) -> Result<(), CliError> {
     }
     let _ = session.send(Command::SetControlType(ControlType::Off));
     let stats = session.stats();
-    print_json(&json!({
+    let summary = json!({
         "model": model_json(&model),
         "frames": frames,
         "checksum_errors": stats.checksum_errors,
         "discarded_bytes": stats.discarded,
-        "link_state": format!("{:?}", session.state()),
-        "supervisor_stop": stop.map(|v| format!("{v:?}")),
+        "unparsed_frames": session.unparsed_frames(),
         "last_angles_deg": last_angles.map(|a| [a.flexion.to_degrees(), a.abduction.to_degrees()]),
-    }))
+    });
+    match session.state() {
+        SessionState::Running => print_json(&summary),
+        SessionState::SafeStop(cause) => stopped(summary, cause),
+    }
 }

@@ -3,6 +3,8 @@
 //! * [`CliError::BadInput`] → exit 2: unreadable file, malformed CSV, missing
 //!   column, non-finite number, non-increasing time, an invalid flag value.
 //! * [`CliError::Internal`] → exit 1: anything that is our fault.
+//! * [`CliError::SafetyStop`] → exit 3: a device session ended in a safe
+//!   stop (the safety function worked; the JSON on stdout says why).
 //!
 //! The message is printed as one line on stderr; it names the file and line
 //! where the input is at fault.
@@ -16,6 +18,9 @@ pub enum CliError {
     /// Limb itself failed (exit code 1).
     #[error("internal error: {0}")]
     Internal(String),
+    /// A device session ended in a safe stop (exit code 3).
+    #[error("safe stop: {0}")]
+    SafetyStop(String),
 }
 
 impl CliError {
@@ -24,6 +29,7 @@ impl CliError {
         match self {
             CliError::BadInput(_) => 2,
             CliError::Internal(_) => 1,
+            CliError::SafetyStop(_) => 3,
         }
     }
 }

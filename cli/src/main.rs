@@ -66,6 +66,29 @@ enum Command {
     Kuka(kuka::KukaCommand),
 }
 
+/// What is logged when `RUST_LOG` is not set: the adapters' warnings
+/// (refused commands, supervisor losses, unpublished telemetry) and every
+/// other crate's errors.
+const DEFAULT_LOG: &str = "error,limb_zenoh=warn,limb_arebo=warn";
+
+/// Logs `tracing` events as lines on stderr, filtered by `RUST_LOG` (the
+/// `tracing-subscriber` `EnvFilter` syntax, e.g. `limb_zenoh=debug`), or by
+/// [`DEFAULT_LOG`]. An unreadable `RUST_LOG` is a usage error.
+fn install_logging() -> Result<(), CliError> {
+    use tracing_subscriber::EnvFilter;
+    let filter = match std::env::var("RUST_LOG") {
+        Ok(spec) => EnvFilter::try_new(&spec)
+            .map_err(|e| CliError::BadInput(format!("RUST_LOG={spec}: {e}")))?,
+        Err(_) => EnvFilter::new(DEFAULT_LOG),
+    };
+    tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .with_ansi(false)
+        .try_init()
+        .map_err(|e| CliError::Internal(format!("logging: {e}")))
+}
+
 fn main() {
     // Usage errors are bad input: one line, exit 2 (help and version print
     // in full and exit 0).
@@ -81,6 +104,10 @@ fn main() {
         }
         Err(error) => error.exit(),
     };
+    if let Err(error) = install_logging() {
+        eprintln!("limb: {error}");
+        std::process::exit(error.exit_code());
+    }
     let result: Result<(), CliError> = match cli.command {
         Command::Run(args) => run::run(&args),
         Command::Population(args) => population::run(&args),

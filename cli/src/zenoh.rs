@@ -1,6 +1,6 @@
 //! `limb zenoh ...`: run a supervised node on the synthetic lift, send a
 //! supervisory command or an emergency stop, query a node. The wire
-//! contract is `adapters/zenoh/README.md`.
+//! contract is `adapters/zenoh/PROTOCOL.md`.
 //!
 //! ```sh
 //! limb zenoh node  --robot arm1 --listen tcp/127.0.0.1:7447 --key-file key --seconds 60
@@ -11,9 +11,9 @@
 
 use crate::error::{print_json, CliError};
 use clap::{Args, Subcommand, ValueEnum};
-use limb_kernel::arm::JointAngles;
 use limb_zenoh::auth::CommandKey;
-use limb_zenoh::link::{LinkSettings, LivenessPolicy, OnSupervisorLoss};
+use limb_zenoh::kernel_wire::{Joints, State};
+use limb_zenoh::link::{LinkSettings, LivenessPolicy, OnSupervisorLoss, SampleQos};
 use limb_zenoh::node::{LoopSettings, Node};
 use limb_zenoh::sensor::ScriptedLift;
 use limb_zenoh::session::peer_config;
@@ -59,7 +59,7 @@ enum Policy {
 /// Where and as whom.
 #[derive(Args)]
 struct Peer {
-    /// Robot id (key prefix `limb/<robot>/@v1`).
+    /// Robot id (key prefix `limb/<robot>/@v2`).
     #[arg(long)]
     robot: String,
     /// Endpoints to connect to, e.g. tcp/127.0.0.1:7447.
@@ -186,6 +186,7 @@ pub fn run(args: ZenohArgs) -> Result<(), CliError> {
                 format: peer.format.into(),
                 command_key: read_key(&key_file)?,
                 sample_decimation: 1,
+                sample_qos: SampleQos::BATCHED,
                 status_period: 0.1,
                 liveness: LivenessPolicy {
                     timeout: positive_duration(liveness_timeout, "--liveness-timeout")?,
@@ -208,7 +209,7 @@ pub fn run(args: ZenohArgs) -> Result<(), CliError> {
             .map_err(bad_input)?;
             std::thread::sleep(run_time);
             let kernel = node.shutdown().map_err(internal)?;
-            print_json(&serde_json::json!({ "state": kernel.state().kind() }))
+            print_json(&serde_json::json!({ "state": State::from(kernel.state().kind()) }))
         }
         Action::Send {
             peer,
@@ -221,7 +222,7 @@ pub fn run(args: ZenohArgs) -> Result<(), CliError> {
                     shoulder_elevation,
                     elbow_flexion,
                 } => SupervisorCommand::ApproveManipulation {
-                    target: JointAngles {
+                    target: Joints {
                         shoulder_elevation,
                         elbow_flexion,
                     },

@@ -184,6 +184,21 @@ pub enum ConfigError {
     LiftShaping,
 }
 
+impl ConfigError {
+    /// Stable numeric code of the group of values.
+    pub const fn code(&self) -> u16 {
+        match self {
+            ConfigError::ImpedanceGain => 1,
+            ConfigError::Limit => 2,
+            ConfigError::Range => 3,
+            ConfigError::EstimationMotion => 4,
+            ConfigError::PlannedSpeed => 5,
+            ConfigError::Validation => 6,
+            ConfigError::LiftShaping => 7,
+        }
+    }
+}
+
 fn positive(value: f64) -> bool {
     value.is_finite() && value > 0.0
 }

@@ -85,6 +85,16 @@ pub enum PlanError {
     NonPositiveSpeed,
 }
 
+impl PlanError {
+    /// Stable numeric code of the error.
+    pub const fn code(&self) -> u16 {
+        match self {
+            PlanError::NonFinite => 1,
+            PlanError::NonPositiveSpeed => 2,
+        }
+    }
+}
+
 impl MinimumJerkMove {
     /// Plans the move from `start` to `goal` with grasp-point peak speed
     /// `peak_speed` [m/s]. A move with no translation takes the minimum

@@ -80,6 +80,22 @@ pub enum StopReason {
     NonFiniteCommand,
 }
 
+impl StopReason {
+    /// Stable numeric code of the reason (logs, wire protocols); the
+    /// payload has its own (e.g. [`crate::monitor::Limit::code`]).
+    pub const fn code(&self) -> u16 {
+        match self {
+            StopReason::Monitor(_) => 1,
+            StopReason::Operator => 2,
+            StopReason::EstimationFailed(_) => 3,
+            StopReason::ModelRejected(_) => 4,
+            StopReason::PathBufferFull => 5,
+            StopReason::PlanFailed(_) => 6,
+            StopReason::NonFiniteCommand => 7,
+        }
+    }
+}
+
 /// Grasp: the robot holds the wrist where it found it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Grasp {
@@ -145,6 +161,17 @@ pub enum TargetError {
     Workspace(Violation),
     /// The move could not be planned.
     Plan(PlanError),
+}
+
+impl TargetError {
+    /// Stable numeric code of the error.
+    pub const fn code(&self) -> u16 {
+        match self {
+            TargetError::JointLimits(_) => 1,
+            TargetError::Workspace(_) => 2,
+            TargetError::Plan(_) => 3,
+        }
+    }
 }
 
 impl StateKind {
@@ -473,6 +500,19 @@ pub enum RefusalReason {
     Target(TargetError),
     /// The estimation motion could not be planned.
     Plan(crate::motion::PlanError),
+}
+
+impl RefusalReason {
+    /// Stable numeric code of the reason.
+    pub const fn code(&self) -> u16 {
+        match self {
+            RefusalReason::NotAllowedInState => 1,
+            RefusalReason::NoFreshMeasurement => 2,
+            RefusalReason::InvalidTime => 3,
+            RefusalReason::Target(_) => 4,
+            RefusalReason::Plan(_) => 5,
+        }
+    }
 }
 
 /// Why new safety limits were refused.

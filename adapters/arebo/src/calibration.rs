@@ -24,6 +24,10 @@ use nalgebra::{Matrix3, Matrix4, SymmetricEigen, Vector3, Vector4};
 /// Fixed-capacity endpoint path (frame R0, m): 3000 samples, 15 s at 200 Hz.
 pub type PathBuffer = heapless::Vec<Vector3<f64>, 3000>;
 
+/// Length of each calibration movement [s] (paper 2.4.3: 15 s of
+/// flexion/extension, then 15 s of small random movements).
+pub const CALIBRATION_PHASE: f64 = 15.0;
+
 /// Fewest points a fit accepts.
 pub const MIN_POINTS: usize = 20;
 /// Jacobi sweeps allowed for the 3×3 eigen-decomposition (converges in

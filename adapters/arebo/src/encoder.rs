@@ -7,6 +7,9 @@
 //! (0.36°) on θ4, θ5. Converting an angle to counts rounds to the nearest
 //! count, which is the quantisation a real read-out applies.
 
+use crate::kinematics::{self, ActuatedAngles};
+use nalgebra::Vector3;
+
 /// Motor encoder resolution [counts per motor turn].
 pub const MOTOR_COUNTS_PER_TURN: f64 = 4096.0;
 /// Gear ratios of joints 1..3 (motor turns per joint turn).
@@ -125,14 +128,34 @@ impl BacklashCompensator {
         link
     }
 
-    /// True when every joint with play moved in the last sample: its play
-    /// is closed and the estimate exact (calibration keeps only these).
+    /// True unless a joint with play may be inside it: every joint with
+    /// play either moved in the last sample (its play is closed and the
+    /// estimate exact) or has not moved since the start (its side of the
+    /// play is unknown, so no compensation is applied and it stays off by
+    /// at most half the play; a pose that holds a joint still, such as
+    /// θ1 in a flexion-only movement, can still be calibrated). A joint
+    /// that moved before and stands still now may be reversing inside its
+    /// play: calibration leaves such samples out.
     pub fn settled(&self) -> bool {
         self.moved
             .iter()
             .zip(self.play)
-            .all(|(moved, play)| *moved || play == 0.0)
+            .zip(self.direction)
+            .all(|((moved, play), direction)| *moved || play == 0.0 || direction == 0.0)
     }
+
+    /// The endpoint estimate [m, frame R0] of one frame's encoder counts
+    /// θ1..θ5: counts → motor-side angles → backlash compensation → forward
+    /// kinematics.
+    pub fn endpoint(&mut self, counts: &[i32; 5]) -> Vector3<f64> {
+        kinematics::endpoint(ActuatedAngles(self.link_angles(actuated_angles(counts).0)))
+    }
+}
+
+/// θ1..θ3 [rad] from encoder counts θ1..θ5 (motor side, no backlash
+/// correction).
+pub fn actuated_angles(counts: &[i32; 5]) -> ActuatedAngles {
+    ActuatedAngles([0, 1, 2].map(|i| Encoder::Actuated(i).angle(counts[i])))
 }
 
 #[cfg(test)]
@@ -159,6 +182,24 @@ mod tests {
         assert!((link[0] - 0.06).abs() < 1e-12);
         let link = compensator.link_angles([0.04; 3]);
         assert!((link[1] - 0.03).abs() < 1e-12);
+    }
+
+    /// Finding 9 of issue 18: a joint that never moves (θ1 in a
+    /// flexion-only movement) does not make every sample "unsettled"; a
+    /// joint that stops after moving (a reversal inside the play) does.
+    #[test]
+    fn a_joint_that_never_moves_keeps_the_samples() {
+        let mut compensator = BacklashCompensator::new([0.02; 3]);
+        compensator.link_angles([0.0; 3]);
+        let mut kept = 0;
+        for i in 1..=10 {
+            let step = f64::from(i) * 0.001;
+            compensator.link_angles([0.0, step, step]);
+            kept += usize::from(compensator.settled());
+        }
+        assert_eq!(kept, 10);
+        compensator.link_angles([0.0, 0.01, 0.011]);
+        assert!(!compensator.settled(), "θ2 stands still after moving");
     }
 
     #[test]

@@ -19,6 +19,8 @@
 //!                    supervisor (one frame → τ_d or a latched safe stop)
 //!                    protocol (framing, streaming decoder)
 //! ```
+//! With `std`: [`link`] (the serial session and a simulated device on a
+//! pseudo-terminal) and [`recording`] (calibration over a session).
 //!
 //! Frames: R0 is the robot base (z up, gravity −z); H0 is the human base
 //! frame, R0 rotated about x_R0 by ψx and translated to the shoulder centre.
@@ -38,6 +40,8 @@ pub mod kinematics;
 #[cfg(feature = "std")]
 pub mod link;
 pub mod protocol;
+#[cfg(feature = "std")]
+pub mod recording;
 pub mod safety;
 #[cfg(feature = "std")]
 pub mod sim;

@@ -2,32 +2,35 @@
 //! speaking the same protocol over a pseudo-terminal.
 //!
 //! # Theory of operation
-//! [`Session`] opens a tty (a real `/dev/ttyACM*` or a pty's slave),
-//! puts it in raw 115200 8N1 mode with a 0.1 s read timeout, sends a
-//! heartbeat every 0.1 s, decodes stream frames with
+//! [`Session`] opens a tty (a real `/dev/ttyACM*` or a pty's slave) with
+//! the `serialport` crate (115200 8N1 raw, exclusive, 0.1 s read timeout),
+//! sends a heartbeat every [`HEARTBEAT_PERIOD`], decodes stream frames with
 //! [`crate::protocol::Decoder`] and checks their age with
-//! [`crate::safety::check_fresh`]. A stale stream, a read error or a
-//! vanished port latches [`SessionState::SafeStop`] and commands the
-//! device's motors off (best effort: the device also stops assisting on
-//! its own when heartbeats stop for 1 s).
+//! [`crate::safety::check_fresh`]. A stale stream, a read or write error, a
+//! vanished port or a control type the device does not confirm latches
+//! [`SessionState::SafeStop`] and commands the device's motors off (best
+//! effort: the device also stops assisting on its own when heartbeats stop
+//! for 1 s). The device's status and error bits are checked by the caller
+//! against what it expects ([`crate::safety::check_device`]): the
+//! supervisor in torque mode, the calibration in gravity compensation.
 //!
 //! [`spawn_device`] runs the simulated robot ([`crate::sim`]) on the pty's
 //! master in a thread: it executes commands, moves the SJM along a
 //! trajectory and streams one frame per 5 ms of simulated time;
-//! [`DeviceFault`] injects garbage, stalls or an unplug.
+//! [`DeviceFault`] injects garbage, stalls, an unplug or a lost heartbeat.
 
 use crate::control::GravityParameters;
+use crate::encoder::actuated_angles;
 use crate::human::ShoulderAngles;
 use crate::kinematics;
 use crate::protocol::{
-    Command, ControlType, Decoder, Telemetry, COMMAND_HEADER, ERROR_HEARTBEAT, TELEMETRY_HEADER,
+    status_byte, status_control, Command, ControlType, Decoder, Telemetry, COMMAND_HEADER,
+    ERROR_HEARTBEAT, TELEMETRY_HEADER,
 };
-use crate::safety::{self, AreboViolation, SafetyLimits};
+use crate::safety::{self, AreboLimit, AreboViolation, SafetyLimits};
 use crate::sim::{self, RobotSensor, Setup, ShoulderJointModel};
-use nix::sys::termios::{self, BaudRate, SetArg, SpecialCharacterIndices};
-use std::fs::{File, OpenOptions};
-use std::io::{Read, Write};
-use std::os::fd::AsFd;
+use serialport::{SerialPort, TTYPort};
+use std::io::{ErrorKind, Read, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU8, Ordering};
 use std::sync::{mpsc, Arc};
@@ -37,36 +40,39 @@ use std::time::{Duration, Instant};
 /// Link failures.
 #[derive(Debug, thiserror::Error)]
 pub enum LinkError {
-    /// Opening, reading or writing the port failed.
+    /// Reading or writing the port failed.
     #[error("serial port I/O: {0}")]
     Io(#[from] std::io::Error),
-    /// Configuring the terminal failed.
-    #[error("terminal settings: {0}")]
-    Terminal(#[from] nix::Error),
+    /// Opening or configuring the port failed.
+    #[error("serial port: {0}")]
+    Port(#[from] serialport::Error),
+    /// The session is in a safe stop (the cause says why).
+    #[error("safe stop: {0:?}")]
+    Stopped(StopCause),
 }
 
-/// Raw 115200 8N1; reads return after `timeout_tenths` × 0.1 s without
-/// data (0: immediately).
-fn make_raw(fd: impl AsFd, timeout_tenths: u8) -> Result<(), LinkError> {
-    let mut settings = termios::tcgetattr(&fd)?;
-    termios::cfmakeraw(&mut settings);
-    termios::cfsetspeed(&mut settings, BaudRate::B115200)?;
-    settings.control_chars[SpecialCharacterIndices::VMIN as usize] = 0;
-    settings.control_chars[SpecialCharacterIndices::VTIME as usize] = timeout_tenths;
-    termios::tcsetattr(&fd, SetArg::TCSANOW, &settings)?;
-    Ok(())
-}
+/// Baud rate of the link.
+pub const BAUD_RATE: u32 = 115_200;
+/// Longest a read waits for data.
+pub const READ_TIMEOUT: Duration = Duration::from_millis(100);
+/// Longest the device may take to confirm a new control type [s].
+pub const CONTROL_CONFIRMATION: f64 = 0.5;
 
 /// A pseudo-terminal pair: the device end and the path a host opens.
-#[derive(Debug)]
 pub struct PseudoTerminal {
     /// Master side (the simulated device's end).
-    pub device: File,
+    pub device: TTYPort,
     /// Path of the slave side (what a host opens, like `/dev/ttyACM0`).
     pub path: PathBuf,
     /// The slave kept open so the master does not hang up before a host
     /// opens the path.
-    _slave: File,
+    _slave: TTYPort,
+}
+
+impl core::fmt::Debug for PseudoTerminal {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "PseudoTerminal({})", self.path.display())
+    }
 }
 
 /// Opens a raw pseudo-terminal pair.
@@ -74,22 +80,27 @@ pub struct PseudoTerminal {
 /// # Errors
 /// [`LinkError`] when the system has no free pty.
 pub fn pseudo_terminal() -> Result<PseudoTerminal, LinkError> {
-    let pair = nix::pty::openpty(None, None)?;
-    make_raw(&pair.slave, 1)?;
-    let path = nix::unistd::ttyname(&pair.slave)?;
+    let (device, slave) = TTYPort::pair()?;
+    let path = slave
+        .name()
+        .map(PathBuf::from)
+        .ok_or(serialport::Error::new(
+            serialport::ErrorKind::NoDevice,
+            "the pty has no slave path",
+        ))?;
     Ok(PseudoTerminal {
-        device: File::from(pair.master),
+        device,
         path,
-        _slave: File::from(pair.slave),
+        _slave: slave,
     })
 }
 
 /// Why a session stopped.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum StopCause {
-    /// A safety verdict (stale stream, limits).
+    /// A safety verdict (stale stream, limits, device status).
     Violation(AreboViolation),
-    /// The port failed (unplugged, closed).
+    /// The port failed (unplugged, closed, a write that did not go out).
     PortLost,
 }
 
@@ -105,16 +116,26 @@ pub enum SessionState {
 /// Heartbeat period [s] (the device gives up after about 1 s).
 pub const HEARTBEAT_PERIOD: f64 = 0.1;
 
+/// One decoded stream frame with its host receive time.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Received {
+    /// The frame.
+    pub telemetry: Telemetry,
+    /// Host time when the read returned it [s, session clock].
+    pub time: f64,
+}
+
 /// The host end of the link.
-#[derive(Debug)]
 pub struct Session {
-    port: File,
+    port: TTYPort,
     decoder: Decoder,
     start: Instant,
     last_frame: Option<f64>,
     last_heartbeat: Option<f64>,
     limits: SafetyLimits,
     state: SessionState,
+    /// Frames with a valid checksum whose payload is not a stream frame.
+    unparsed: u32,
 }
 
 impl Session {
@@ -123,8 +144,9 @@ impl Session {
     /// # Errors
     /// [`LinkError`] when the port cannot be opened or configured.
     pub fn open(path: &Path, limits: SafetyLimits) -> Result<Self, LinkError> {
-        let port = OpenOptions::new().read(true).write(true).open(path)?;
-        make_raw(&port, 1)?;
+        let port = serialport::new(path.to_string_lossy(), BAUD_RATE)
+            .timeout(READ_TIMEOUT)
+            .open_native()?;
         let mut session = Self {
             port,
             decoder: Decoder::new(TELEMETRY_HEADER),
@@ -133,6 +155,7 @@ impl Session {
             last_heartbeat: None,
             limits,
             state: SessionState::Running,
+            unparsed: 0,
         };
         session.send(Command::StartStream)?;
         Ok(session)
@@ -153,49 +176,107 @@ impl Session {
         self.decoder.stats
     }
 
-    /// Sends a command.
-    ///
-    /// # Errors
-    /// [`LinkError::Io`].
-    pub fn send(&mut self, command: Command) -> Result<(), LinkError> {
-        self.port.write_all(&command.encode())?;
-        Ok(())
+    /// Frames with a valid checksum that were not a 53-byte stream frame
+    /// (dropped, counted here).
+    pub fn unparsed_frames(&self) -> u32 {
+        self.unparsed
     }
 
-    fn stop(&mut self, cause: StopCause) {
+    /// Sends a command. A write that fails latches the safe stop (and tries
+    /// to command the motors off).
+    ///
+    /// # Errors
+    /// [`LinkError::Io`] when the write failed.
+    pub fn send(&mut self, command: Command) -> Result<(), LinkError> {
+        let written = self.port.write_all(&command.encode());
+        if written.is_err() {
+            self.stop(StopCause::PortLost);
+        }
+        Ok(written?)
+    }
+
+    /// Latches the safe stop with `cause` (the first cause is kept) and
+    /// commands the motors off, best effort: the port may be gone.
+    pub fn stop(&mut self, cause: StopCause) {
         if self.state == SessionState::Running {
             self.state = SessionState::SafeStop(cause);
-            // Best effort: the port may be gone.
-            let _ = self.send(Command::SetControlType(ControlType::Off));
+            let _ = self
+                .port
+                .write_all(&Command::SetControlType(ControlType::Off).encode());
         }
     }
 
+    /// Sets the device's control type and waits until a frame reports it
+    /// (at most [`CONTROL_CONFIRMATION`]); returns the frames from the
+    /// confirming one on (those before it are dropped).
+    ///
+    /// # Errors
+    /// [`LinkError::Stopped`] when the device did not confirm (the session
+    /// is then in a safe stop with an [`AreboLimit::ControlType`] verdict)
+    /// or the session stopped meanwhile.
+    pub fn set_control(&mut self, control: ControlType) -> Result<Vec<Received>, LinkError> {
+        self.send(Command::SetControlType(control))?;
+        let deadline = self.now() + CONTROL_CONFIRMATION;
+        let mut reported = None;
+        while self.now() < deadline {
+            let mut frames = self.poll();
+            for (i, frame) in frames.iter().enumerate() {
+                reported = status_control(frame.telemetry.status);
+                if reported == Some(control) {
+                    return Ok(frames.split_off(i));
+                }
+            }
+            if let SessionState::SafeStop(cause) = self.state {
+                return Err(LinkError::Stopped(cause));
+            }
+        }
+        let cause = StopCause::Violation(AreboViolation {
+            limit: AreboLimit::ControlType,
+            value: f64::from(reported.map_or(3, |c| c as u8)),
+            bound: f64::from(control as u8),
+        });
+        self.stop(cause);
+        Err(LinkError::Stopped(cause))
+    }
+
     /// One poll: heartbeat when due, read what arrived (waits at most
-    /// 0.1 s), decode, check freshness. Returns the frames decoded.
-    pub fn poll(&mut self) -> Vec<Telemetry> {
+    /// [`READ_TIMEOUT`]), decode, check freshness. Returns the frames
+    /// decoded, stamped with the host time of the read.
+    pub fn poll(&mut self) -> Vec<Received> {
         let now = self.now();
         if self
             .last_heartbeat
             .is_none_or(|t| now - t >= HEARTBEAT_PERIOD)
         {
-            if self.send(Command::Heartbeat).is_err() {
-                self.stop(StopCause::PortLost);
-            }
+            // A failed write latches the stop inside `send`.
+            let _ = self.send(Command::Heartbeat);
             self.last_heartbeat = Some(now);
         }
-        let mut bytes = [0u8; 512];
+        // Large enough to drain a backlog quickly (a frame is 57 bytes).
+        let mut bytes = [0u8; 4096];
         let mut frames = Vec::new();
-        match self.port.read(&mut bytes) {
+        let read = match self.port.read(&mut bytes) {
+            Err(e) if e.kind() == ErrorKind::TimedOut => Ok(0),
+            other => other,
+        };
+        let now = self.now();
+        match read {
             Ok(n) => {
                 for byte in bytes.iter().take(n) {
-                    if let Some(t) = self.decoder.push(*byte).and_then(|p| Telemetry::parse(&p)) {
-                        frames.push(t);
+                    let Some(payload) = self.decoder.push(*byte) else {
+                        continue;
+                    };
+                    match Telemetry::parse(&payload) {
+                        Some(telemetry) => frames.push(Received {
+                            telemetry,
+                            time: now,
+                        }),
+                        None => self.unparsed = self.unparsed.saturating_add(1),
                     }
                 }
             }
             Err(_) => self.stop(StopCause::PortLost),
         }
-        let now = self.now();
         if !frames.is_empty() {
             self.last_frame = Some(now);
         }
@@ -222,6 +303,9 @@ pub enum DeviceFault {
     Stall = 2,
     /// Closes the port (USB unplugged).
     Unplug = 3,
+    /// Behaves as if the host's heartbeats stopped arriving: reports
+    /// [`ERROR_HEARTBEAT`] and stops applying the torque target.
+    HeartbeatLost = 4,
 }
 
 /// Shared switch for [`DeviceFault`].
@@ -239,6 +323,7 @@ impl FaultSwitch {
             1 => DeviceFault::Garbage,
             2 => DeviceFault::Stall,
             3 => DeviceFault::Unplug,
+            4 => DeviceFault::HeartbeatLost,
             _ => DeviceFault::None,
         }
     }
@@ -249,6 +334,8 @@ impl FaultSwitch {
 pub struct DeviceRecord {
     /// True shoulder angles per streamed frame (the SJM's encoders).
     pub truth: Vec<ShoulderAngles>,
+    /// The control type the device ran per streamed frame.
+    pub control: Vec<ControlType>,
     /// Frames streamed.
     pub frames: usize,
 }
@@ -256,30 +343,51 @@ pub struct DeviceRecord {
 /// A trajectory the device's SJM follows (simulated time [s]).
 pub type DeviceTrajectory = Box<dyn Fn(f64) -> (ShoulderAngles, [f64; 2]) + Send>;
 
+/// Longest the simulated device waits to write a frame into a full pty.
+const DEVICE_WRITE_TIMEOUT: Duration = Duration::from_secs(30);
+
 /// Runs the simulated AREBO on `device` until it has streamed `frames`
 /// frames (or spent 2 × `frames` periods), one period of `wall_period`
 /// real time per frame; each streamed frame advances the simulation by
-/// 5 ms.
+/// 5 ms, and the frame's run time is that simulated time. The simulated
+/// person starts `trajectory` (its time 0) at the first streamed frame in
+/// which the motors are on.
+///
+/// The robot acts on the cuff by its control type: motors off, its weight
+/// rests on the person's arm (f = −J_a^{-T} τ_g, about 25-35 N); gravity
+/// compensation holds its own weight (no force); torque mode applies the
+/// target τ_d as an ideal force J_a^{-T} τ_d, until the host's heartbeat is
+/// missing for 1 s, when it falls back to gravity compensation and reports
+/// [`ERROR_HEARTBEAT`].
+///
+/// # Errors
+/// [`LinkError`] when the port cannot be cloned.
 pub fn spawn_device(
-    device: File,
+    device: TTYPort,
     setup: Setup,
     trajectory: DeviceTrajectory,
     frames: usize,
     wall_period: Duration,
     fault: FaultSwitch,
 ) -> Result<JoinHandle<DeviceRecord>, LinkError> {
-    let mut writer = device.try_clone()?;
+    let mut writer = device.try_clone_native()?;
+    // A simulated device waits for a slow host rather than ending (a test
+    // machine under load must not turn into a device fault).
+    writer.set_timeout(DEVICE_WRITE_TIMEOUT)?;
     let (commands, received) = mpsc::channel();
     let mut reader = device;
-    // Reads block on a pty master; a helper thread forwards commands and
-    // ends when the port closes.
+    // A helper thread forwards commands; it ends when the port closes or
+    // the device thread has ended.
     std::thread::spawn(move || {
         let mut decoder = Decoder::new(COMMAND_HEADER);
         let mut bytes = [0u8; 256];
-        while let Ok(n) = reader.read(&mut bytes) {
-            if n == 0 {
-                break;
-            }
+        loop {
+            let n = match reader.read(&mut bytes) {
+                Ok(0) => return,
+                Ok(n) => n,
+                Err(e) if e.kind() == ErrorKind::TimedOut => 0,
+                Err(_) => return,
+            };
             for byte in bytes.iter().take(n) {
                 if let Some(command) = decoder.push(*byte).and_then(|p| Command::parse(&p)) {
                     if commands.send(command).is_err() {
@@ -294,17 +402,19 @@ pub fn spawn_device(
         let mut sensor = RobotSensor::new(setup.backlash);
         let mut record = DeviceRecord {
             truth: Vec::new(),
+            control: Vec::new(),
             frames: 0,
         };
         let (mut streaming, mut control, mut target) = (false, ControlType::Off, [0f32; 3]);
         let mut packet = 0u16;
-        let start = Instant::now();
-        let mut last_heartbeat = start;
+        let mut last_heartbeat = Instant::now();
         let mut counts = [0i32; 5];
         let mut garbage = sim::SplitMix64::new(7);
-        // Simulated time runs while the device streams, so the motion
-        // starts when a host starts the stream.
+        // The device's clock runs while it streams; the person follows the
+        // trajectory from when the robot first carries its own weight
+        // (told to start once it is gravity compensated).
         let mut simulated = 0usize;
+        let mut person: Option<usize> = None;
         // Idle (not streaming) periods count too, so a device nobody
         // starts still ends.
         for _ in 0..frames.saturating_mul(2) {
@@ -322,24 +432,30 @@ pub fn spawn_device(
                     Command::GetVersion | Command::Calibrate | Command::SetDiagnostics(_) => {}
                 }
             }
-            let heartbeat_missing = last_heartbeat.elapsed() > Duration::from_secs(1);
-            let q = sim::actuated_angles(&counts);
-            // Torque mode: the robot pushes the cuff with J_a^{-T} τ_d
-            // (ideal torque tracking); off without a heartbeat.
-            let torque_on = control == ControlType::Torque && !heartbeat_missing;
-            let desired = nalgebra::Vector3::new(
-                f64::from(target[0]),
-                f64::from(target[1]),
-                f64::from(target[2]),
-            );
-            let force = if torque_on {
-                crate::control::interaction_force(q, &desired).unwrap_or_default()
-            } else {
-                nalgebra::Vector3::zeros()
+            let fault = fault.get();
+            let heartbeat_missing = last_heartbeat.elapsed() > Duration::from_secs(1)
+                || fault == DeviceFault::HeartbeatLost;
+            let q = actuated_angles(&counts);
+            let gravity = GravityParameters::ASSUMED.torques(q);
+            let applied = match control {
+                ControlType::Off => -gravity,
+                ControlType::Torque if !heartbeat_missing => nalgebra::Vector3::new(
+                    f64::from(target[0]),
+                    f64::from(target[1]),
+                    f64::from(target[2]),
+                ),
+                ControlType::Torque | ControlType::GravityCompensation => {
+                    nalgebra::Vector3::zeros()
+                }
             };
+            let force = crate::control::interaction_force(q, &applied).unwrap_or_default();
             if streaming {
+                if control != ControlType::Off {
+                    person.get_or_insert(simulated);
+                }
+                let moved = person.map_or(0, |started| simulated - started);
                 for k in 0..5 {
-                    let t = (simulated * 5 + k) as f64 * sim::PHYSICS_STEP;
+                    let t = (moved * 5 + k) as f64 * sim::PHYSICS_STEP;
                     sjm.step(trajectory(t), &force);
                 }
                 simulated += 1;
@@ -347,24 +463,32 @@ pub fn spawn_device(
             if let Some(c) = sensor.read(&sjm.endpoint()) {
                 counts = c;
             }
-            let gravity = GravityParameters::ASSUMED.torques(sim::actuated_angles(&counts));
-            let interaction = kinematics::joint_torques(sim::actuated_angles(&counts), &force);
-            let sensed = gravity + interaction;
+            let q = actuated_angles(&counts);
+            let gravity = GravityParameters::ASSUMED.torques(q);
+            let interaction = kinematics::joint_torques(q, &force);
+            // The sensors read the robot's weight unless the motors are off
+            // (then the cuff carries it), plus the interaction.
+            let held = if control == ControlType::Off {
+                nalgebra::Vector3::zeros()
+            } else {
+                gravity
+            };
+            let sensed = held + interaction;
+            let run_time = simulated as f64 * sim::SAMPLE_PERIOD * 1000.0;
             let frame = Telemetry {
-                status: u8::from(streaming) | ((control as u8) << 4),
+                status: status_byte(streaming, control),
                 error: if heartbeat_missing {
                     ERROR_HEARTBEAT
                 } else {
                     0
                 },
                 packet,
-                run_time_ms: u32::try_from(start.elapsed().as_millis()).unwrap_or(u32::MAX),
+                run_time_ms: run_time as u32,
                 counts,
                 torques: [sensed.x as f32, sensed.y as f32, sensed.z as f32],
-                commanded: [gravity.x as f32, gravity.y as f32, gravity.z as f32],
+                commanded: [held.x as f32, held.y as f32, held.z as f32],
             };
             packet = packet.wrapping_add(1);
-            let fault = fault.get();
             if fault == DeviceFault::Unplug {
                 break;
             }
@@ -383,6 +507,7 @@ pub fn spawn_device(
                     break;
                 }
                 record.truth.push(sjm.angles());
+                record.control.push(control);
                 record.frames += 1;
             }
             std::thread::sleep(wall_period);

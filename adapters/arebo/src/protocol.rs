@@ -164,7 +164,8 @@ pub enum ControlType {
 }
 
 impl ControlType {
-    fn from_code(code: u8) -> Option<Self> {
+    /// The type of a code (0-2); `None` for any other.
+    pub fn from_code(code: u8) -> Option<Self> {
         match code {
             0 => Some(Self::Off),
             1 => Some(Self::GravityCompensation),
@@ -253,10 +254,27 @@ fn f32_at(bytes: &[u8], at: usize) -> Option<f32> {
     bytes_at(bytes, at).map(f32::from_le_bytes)
 }
 
-/// Error bit: the PC's heartbeat is missing.
+/// Error bit: the PC's heartbeat is missing (the device has stopped
+/// applying the torque target).
 pub const ERROR_HEARTBEAT: u16 = 1;
 /// Error bit: a torque sensor did not answer.
 pub const ERROR_TORQUE_SENSOR: u16 = 2;
+/// Status bit: the device is streaming.
+pub const STATUS_STREAMING: u8 = 1;
+/// Status bits 4-5: the control type the device is running.
+pub const STATUS_CONTROL_SHIFT: u8 = 4;
+/// Mask of the status bits with a meaning; the others are reserved (0).
+pub const STATUS_KNOWN: u8 = STATUS_STREAMING | (0b11 << STATUS_CONTROL_SHIFT);
+
+/// The status byte of a device streaming (or not) in `control`.
+pub fn status_byte(streaming: bool, control: ControlType) -> u8 {
+    u8::from(streaming) | ((control as u8) << STATUS_CONTROL_SHIFT)
+}
+
+/// The control type in a status byte; `None` for the undefined code 3.
+pub fn status_control(status: u8) -> Option<ControlType> {
+    ControlType::from_code((status >> STATUS_CONTROL_SHIFT) & 0b11)
+}
 
 /// One device stream frame.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -10,6 +10,9 @@
 //! as they are, AREBO's own from 100.
 
 use crate::human::ShoulderAngles;
+use crate::protocol::{
+    status_control, ControlType, ERROR_HEARTBEAT, ERROR_TORQUE_SENSOR, STATUS_KNOWN,
+};
 use limb_kernel::config::Interval;
 use limb_kernel::monitor::Limit;
 use nalgebra::Vector3;
@@ -23,6 +26,17 @@ pub enum AreboLimit {
     Flexion,
     /// Shoulder abduction/adduction φ2 outside its range [rad].
     Abduction,
+    /// The device reports the host's heartbeat missing: it has stopped
+    /// applying the torque target (value: the error bits).
+    DeviceHeartbeatMissing,
+    /// The device reports a torque sensor fault (value: the error bits).
+    TorqueSensorFault,
+    /// The device reports an error bit this host does not know, or a
+    /// reserved status bit (value: the error bits, or the status byte).
+    UnknownDeviceError,
+    /// The device runs another control type than the host set (value: the
+    /// reported code, 3 = undefined; bound: the expected code).
+    ControlType,
 }
 
 impl AreboLimit {
@@ -32,6 +46,10 @@ impl AreboLimit {
             AreboLimit::Kernel(limit) => limit.code(),
             AreboLimit::Flexion => 100,
             AreboLimit::Abduction => 101,
+            AreboLimit::DeviceHeartbeatMissing => 102,
+            AreboLimit::TorqueSensorFault => 103,
+            AreboLimit::UnknownDeviceError => 104,
+            AreboLimit::ControlType => 105,
         }
     }
 }
@@ -133,6 +151,42 @@ pub fn check_fresh(frame_time: Option<f64>, now: f64, limits: &SafetyLimits) -> 
     at_most(stale, age, limits.stale_after)
 }
 
+/// Checks a frame's device status and error bits against the control type
+/// the host set: every error bit stops (a known one by name, any other as
+/// [`AreboLimit::UnknownDeviceError`]), so does a reserved status bit or a
+/// control type other than `expected`.
+pub fn check_device(status: u8, error: u16, expected: ControlType) -> AreboVerdict {
+    let device = |limit, value: u16, bound: f64| AreboViolation {
+        limit,
+        value: f64::from(value),
+        bound,
+    };
+    if error & ERROR_HEARTBEAT != 0 {
+        return Err(device(AreboLimit::DeviceHeartbeatMissing, error, 0.0));
+    }
+    if error & ERROR_TORQUE_SENSOR != 0 {
+        return Err(device(AreboLimit::TorqueSensorFault, error, 0.0));
+    }
+    if error != 0 {
+        return Err(device(AreboLimit::UnknownDeviceError, error, 0.0));
+    }
+    if status & !STATUS_KNOWN != 0 {
+        return Err(device(
+            AreboLimit::UnknownDeviceError,
+            u16::from(status),
+            0.0,
+        ));
+    }
+    match status_control(status) {
+        Some(control) if control == expected => Ok(()),
+        reported => Err(device(
+            AreboLimit::ControlType,
+            reported.map_or(3, |c| c as u16),
+            f64::from(expected as u8),
+        )),
+    }
+}
+
 /// Checks one frame's derived quantities: shoulder angles, interaction
 /// force [N, frame R0] and torque sensor readings [N m].
 pub fn check_frame(
@@ -171,6 +225,53 @@ pub fn check_frame(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Finding 7 of issue 18: every error bit and every status bit reaches
+    /// the verdict.
+    #[test]
+    fn every_device_error_and_status_bit_is_a_verdict() {
+        use crate::protocol::status_byte;
+        let torque = status_byte(true, ControlType::Torque);
+        assert_eq!(check_device(torque, 0, ControlType::Torque), Ok(()));
+        let limit = |status, error| {
+            check_device(status, error, ControlType::Torque)
+                .unwrap_err()
+                .limit
+        };
+        assert_eq!(
+            limit(torque, ERROR_HEARTBEAT),
+            AreboLimit::DeviceHeartbeatMissing
+        );
+        assert_eq!(
+            limit(torque, ERROR_TORQUE_SENSOR),
+            AreboLimit::TorqueSensorFault
+        );
+        for bit in 2..16 {
+            assert_eq!(limit(torque, 1 << bit), AreboLimit::UnknownDeviceError);
+        }
+        for bit in [1, 2, 3, 6, 7] {
+            assert_eq!(
+                limit(torque | (1 << bit), 0),
+                AreboLimit::UnknownDeviceError
+            );
+        }
+        for other in [ControlType::Off, ControlType::GravityCompensation] {
+            assert_eq!(limit(status_byte(true, other), 0), AreboLimit::ControlType);
+        }
+        assert_eq!(limit(0b0011_0001, 0), AreboLimit::ControlType);
+        let codes = [102, 103, 104, 105];
+        for (limit, code) in [
+            AreboLimit::DeviceHeartbeatMissing,
+            AreboLimit::TorqueSensorFault,
+            AreboLimit::UnknownDeviceError,
+            AreboLimit::ControlType,
+        ]
+        .into_iter()
+        .zip(codes)
+        {
+            assert_eq!(limit.code(), code);
+        }
+    }
 
     #[test]
     fn verdicts_name_the_limit() {

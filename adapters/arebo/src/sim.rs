@@ -18,12 +18,12 @@
 //! human-angle estimate does not use them.
 
 use crate::calibration::{
-    self, CalibrationLimits, FitError, PathBuffer, Rejection, ValidatedArmModel,
+    self, CalibrationLimits, FitError, PathBuffer, Rejection, ValidatedArmModel, CALIBRATION_PHASE,
 };
 use crate::control::{self, AdaptiveDeweighting};
 use crate::encoder::{BacklashCompensator, Encoder};
 use crate::human::{self, ArmMass, ShoulderAngles};
-use crate::kinematics::{self, ActuatedAngles, ElbowBranch, ShoulderBranch};
+use crate::kinematics::{self, ElbowBranch, ShoulderBranch};
 use nalgebra::Vector3;
 
 /// Simulation step of the SJM dynamics [s] (1 kHz).
@@ -223,20 +223,6 @@ impl RobotSensor {
     }
 }
 
-/// θ1..θ3 [rad] from encoder counts θ1..θ5 (motor side, no backlash
-/// correction).
-pub fn actuated_angles(counts: &[i32; 5]) -> ActuatedAngles {
-    ActuatedAngles([0, 1, 2].map(|i| Encoder::Actuated(i).angle(counts[i])))
-}
-
-/// The adapter's endpoint estimate [m, frame R0]: counts → angles →
-/// backlash compensation → forward kinematics.
-pub fn endpoint_estimate(compensator: &mut BacklashCompensator, counts: &[i32; 5]) -> Vector3<f64> {
-    kinematics::endpoint(ActuatedAngles(
-        compensator.link_angles(actuated_angles(counts).0),
-    ))
-}
-
 /// A trajectory generator: angles and rates at time t [s].
 pub type Trajectory<'a> = &'a dyn Fn(f64) -> (ShoulderAngles, [f64; 2]);
 
@@ -329,7 +315,7 @@ fn record(setup: Setup, trajectory: Trajectory, duration: f64) -> PathBuffer {
         if let Some(counts) = counts {
             // Capacity 3000 = 15 s at 200 Hz; longer runs keep the first
             // 15 s. Samples inside a joint's play are left out.
-            let endpoint = endpoint_estimate(&mut compensator, &counts);
+            let endpoint = compensator.endpoint(&counts);
             if compensator.settled() {
                 let _ = path.push(endpoint);
             }
@@ -353,9 +339,6 @@ pub fn calibrate(setup: Setup, seed: u64) -> Result<ValidatedArmModel, Calibrati
     calibration::validate(&plane, &sphere, &CalibrationLimits::default())
         .map_err(CalibrationFailure::Rejected)
 }
-
-/// Length of each calibration phase [s].
-pub const CALIBRATION_PHASE: f64 = 15.0;
 
 /// Calibration phase 1: three flexion movements 0-90° in 15 s, φ2 = 0.
 pub fn flexion_calibration(t: f64) -> (ShoulderAngles, [f64; 2]) {
@@ -424,8 +407,7 @@ pub fn polysine_experiment(
     let (mut flexion, mut abduction) = (Vec::new(), Vec::new());
     let mut compensator = BacklashCompensator::new(setup.compensated_backlash);
     run_unassisted(setup, &|t| motion.at(t), duration, |truth, counts| {
-        let estimate =
-            counts.and_then(|c| model.angles(&endpoint_estimate(&mut compensator, &c)).ok());
+        let estimate = counts.and_then(|c| model.angles(&compensator.endpoint(&c)).ok());
         if let Some(estimate) = estimate {
             flexion.push((estimate.flexion - truth.flexion).abs());
             abduction.push((estimate.abduction - truth.abduction).abs());
@@ -504,7 +486,7 @@ pub fn weight_support_experiment(
         for n in 0..samples {
             let estimate = sensor
                 .read(&sjm.endpoint())
-                .and_then(|c| model.angles(&endpoint_estimate(&mut compensator, &c)).ok());
+                .and_then(|c| model.angles(&compensator.endpoint(&c)).ok());
             // The robot holds its last force if a sample cannot be read.
             if let Some(phi) = estimate {
                 force = control::support_force(alpha, phi, model, setup.arm).unwrap_or(force);

@@ -3,7 +3,8 @@
 //!
 //! # Theory of operation
 //! ```text
-//! frame (counts, τ_r, time) ─▶ freshness ─▶ backlash-compensated θ ─▶ FK ─▶ φ̂
+//! frame (status, error, counts, τ_r, time) ─▶ freshness ─▶ device status and
+//!        error bits (torque mode, no error) ─▶ backlash-compensated θ ─▶ FK ─▶ φ̂
 //!        τ_int = τ_r − τ_g(θ) ─▶ f_int = J_a^{-T} τ_int
 //!        check_frame(φ̂, f_int, τ_r) ─▶ mode ─▶ τ_d  (sent as the control target;
 //!                                                  the firmware runs the torque PD)
@@ -16,6 +17,7 @@ use crate::control::{self, GravityParameters, Mode};
 use crate::encoder::{BacklashCompensator, Encoder};
 use crate::human::{ArmMass, ShoulderAngles};
 use crate::kinematics::{self, ActuatedAngles};
+use crate::protocol::ControlType;
 use crate::safety::{self, AreboLimit, AreboViolation, SafetyLimits};
 use limb_kernel::monitor::Limit;
 use nalgebra::Vector3;
@@ -23,6 +25,10 @@ use nalgebra::Vector3;
 /// One decoded stream frame, as the supervisor needs it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sample {
+    /// The device's status byte (streaming, control type).
+    pub status: u8,
+    /// The device's error bits.
+    pub error: u16,
     /// Encoder counts θ1..θ5.
     pub counts: [i32; 5],
     /// Torque sensor readings τ_r [N m].
@@ -109,6 +115,8 @@ impl Supervisor {
             f64::INFINITY,
             self.limits.stale_after,
         ))?;
+        // The targets mean something only while the device applies them.
+        safety::check_device(sample.status, sample.error, ControlType::Torque)?;
         let motor = [0, 1, 2].map(|i| Encoder::Actuated(i).angle(sample.counts[i]));
         let q = ActuatedAngles(self.compensator.link_angles(motor));
         let endpoint = kinematics::endpoint(q);
@@ -181,6 +189,8 @@ mod tests {
         });
         let torques = GravityParameters::ASSUMED.torques(q) + kinematics::joint_torques(q, &force);
         Sample {
+            status: crate::protocol::status_byte(true, ControlType::Torque),
+            error: 0,
             counts,
             torques,
             time,
@@ -229,6 +239,37 @@ mod tests {
         assert!(matches!(
             s.step(Some(&fresh), 1.3, Mode::Unassisted),
             Output::SafeStop(_)
+        ));
+    }
+
+    /// Finding 7 of issue 18: the device's heartbeat-missing bit (it has
+    /// stopped assisting) stops the host, as does a device that left
+    /// torque mode.
+    #[test]
+    fn device_error_bits_stop_the_supervisor() {
+        let model = model();
+        let phi = ShoulderAngles {
+            flexion: 0.7,
+            abduction: 0.2,
+        };
+        let mode = Mode::WeightSupport { alpha: 0.5 };
+        let mut s = supervisor(model);
+        let mut frame = sample_at(&model, phi, Vector3::zeros(), 1.0);
+        assert!(matches!(
+            s.step(Some(&frame), 1.0, mode),
+            Output::Target { .. }
+        ));
+        frame.error = crate::protocol::ERROR_HEARTBEAT;
+        assert!(matches!(
+            s.step(Some(&frame), 1.0, mode),
+            Output::SafeStop(v) if v.limit == AreboLimit::DeviceHeartbeatMissing
+        ));
+        let mut s = supervisor(model);
+        let mut off = sample_at(&model, phi, Vector3::zeros(), 1.0);
+        off.status = crate::protocol::status_byte(true, ControlType::Off);
+        assert!(matches!(
+            s.step(Some(&off), 1.0, mode),
+            Output::SafeStop(v) if v.limit == AreboLimit::ControlType
         ));
     }
 

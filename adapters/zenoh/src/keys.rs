@@ -1,4 +1,4 @@
-//! Key expressions of one robot, all under `limb/<robot-id>/@v1/`.
+//! Key expressions of one robot, all under `limb/<robot-id>/@v2/`.
 //!
 //! | key (after the prefix) | direction | QoS | payload |
 //! |---|---|---|---|
@@ -14,8 +14,11 @@
 //! | `alive/supervisor` | → kernel | best effort, signed | [`crate::wire::Heartbeat`] |
 //! | `alive/kernel` | kernel → | best effort | [`crate::wire::KernelStatus`] |
 //!
-//! The `@v1` chunk seals the namespace: a wildcard such as `limb/*/**`
-//! does not match into it, and a future incompatible encoding gets `@v2`.
+//! The `@v2` chunk seals the namespace: a wildcard such as `limb/*/**` or
+//! `limb/<robot-id>/**` does not match into it (subscribe to
+//! `limb/<robot-id>/@v2/**`), and an incompatible encoding gets the next
+//! `@vN`. `@v1` (before `PROTOCOL.md`) spelled kernel values by their Rust
+//! names and counted heartbeats from 0; see `PROTOCOL.md`, "Changes".
 
 use crate::error::AdapterError;
 
@@ -40,11 +43,11 @@ impl Keys {
             return Err(AdapterError::RobotId(robot_id.to_owned()));
         }
         Ok(Self {
-            prefix: format!("limb/{robot_id}/@v1"),
+            prefix: format!("limb/{robot_id}/@v2"),
         })
     }
 
-    /// `limb/<robot-id>/@v1/<suffix>`.
+    /// `limb/<robot-id>/@v2/<suffix>`.
     pub fn key(&self, suffix: &str) -> String {
         format!("{}/{suffix}", self.prefix)
     }
@@ -112,13 +115,13 @@ mod tests {
     #[test]
     fn keys_live_under_the_versioned_prefix() {
         let keys = Keys::new("arm-1").unwrap();
-        assert_eq!(keys.request(), "limb/arm-1/@v1/cmd/request");
-        assert_eq!(keys.supervisor_alive(), "limb/arm-1/@v1/alive/supervisor");
+        assert_eq!(keys.request(), "limb/arm-1/@v2/cmd/request");
+        assert_eq!(keys.supervisor_alive(), "limb/arm-1/@v2/alive/supervisor");
     }
 
     #[test]
     fn robot_ids_that_would_change_the_key_space_are_refused() {
-        for bad in ["", "a/b", "*", "a**", "@v1", "a b"] {
+        for bad in ["", "a/b", "*", "a**", "@v2", "a b"] {
             assert!(Keys::new(bad).is_err(), "{bad}");
         }
     }

@@ -5,8 +5,10 @@
 //! on the supervisor and an emergency stop that never waits behind
 //! telemetry.
 //!
-//! - [`keys`]: the key expressions `limb/<robot-id>/@v1/...`;
+//! - [`keys`]: the key expressions `limb/<robot-id>/@v2/...`;
 //! - [`wire`]: the versioned JSON / CBOR encoding of every message;
+//! - [`kernel_wire`]: the wire's own spelling of kernel states, faults,
+//!   events, frames and commands (a kernel rename cannot change `@v2`);
 //! - [`auth`]: HMAC-SHA256 signatures of commands and heartbeats;
 //! - [`link`]: the node's Zenoh side and [`link::Supervision`], its
 //!   in-loop half (also usable from another adapter's loop);
@@ -22,6 +24,7 @@
 
 pub mod auth;
 pub mod error;
+pub mod kernel_wire;
 pub mod keys;
 pub mod link;
 pub mod node;

@@ -13,8 +13,10 @@
 //!                                                               │
 //!             try_send, never blocks the loop: bounded queue (1024)
 //!                                                               ▼
-//!       publisher thread: events, acks, link (Block) · samples (Drop) ·
-//!       status (alive/kernel) · model/arm · snapshot for the queryables
+//!       publisher thread: events, acks, link (Block) · status
+//!       (alive/kernel) · model/arm · snapshot for the queryables
+//!       · samples (Drop), unless [`SampleQos::from_loop`] puts them
+//!       from the loop itself
 //! ```
 //! Zenoh callbacks do constant work and never wait: an emergency stop sets
 //! an atomic flag the loop reads at every step, so it reaches the kernel
@@ -46,6 +48,9 @@ use zenoh::Wait;
 pub const COMMAND_QUEUE: usize = 16;
 /// Messages waiting for the publisher thread; more are dropped and counted.
 pub const OUTBOUND_QUEUE: usize = 1024;
+/// Emergency stops waiting for their ack; more still stop the robot, but
+/// their acks are dropped and counted.
+pub const ESTOP_QUEUE: usize = 16;
 
 /// What the kernel side does when the supervisor's heartbeat stops.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -67,6 +72,43 @@ pub struct LivenessPolicy {
     pub on_loss: OnSupervisorLoss,
 }
 
+/// How `telemetry/sample` is published (always best effort, congestion
+/// control Drop: a congested link loses samples, never delays the loop
+/// for long).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SampleQos {
+    /// Zenoh express: each sample is sent at once instead of being batched
+    /// with others.
+    pub express: bool,
+    /// Zenoh priority of the samples.
+    pub priority: Priority,
+    /// Put each sample from the control loop itself instead of handing it
+    /// to the publisher thread (one thread wake-up less). A put with
+    /// congestion control Drop does not wait for the network; on a full
+    /// transmit queue Zenoh waits at most its `wait_before_drop` (1 ms by
+    /// default) before dropping.
+    pub from_loop: bool,
+}
+
+impl SampleQos {
+    /// Batched, priority DataHigh, through the publisher thread: the
+    /// default. The README's side-by-side benchmark found no setting with a
+    /// lower p99 latency beyond run-to-run noise, and putting from the loop
+    /// cost it steps under load.
+    pub const BATCHED: Self = Self {
+        express: false,
+        priority: Priority::DataHigh,
+        from_loop: false,
+    };
+    /// Express, priority DataHigh, put from the loop (one thread hop less;
+    /// the loop does Zenoh's work).
+    pub const LOW_LATENCY: Self = Self {
+        express: true,
+        priority: Priority::DataHigh,
+        from_loop: true,
+    };
+}
+
 /// Settings of the Zenoh side of a node.
 #[derive(Clone, Debug)]
 pub struct LinkSettings {
@@ -78,6 +120,8 @@ pub struct LinkSettings {
     pub command_key: CommandKey,
     /// Publish one sample every this many steps (1 = every step).
     pub sample_decimation: u32,
+    /// How samples are published.
+    pub sample_qos: SampleQos,
     /// Period of `alive/kernel` status messages [kernel s].
     pub status_period: f64,
     /// Supervisor watchdog.
@@ -96,12 +140,19 @@ fn stamp(epoch: Instant) -> u64 {
 pub(crate) struct Shared {
     /// Origin of the `stamp` values.
     epoch: Instant,
-    /// Arrival stamp of a pending emergency stop, 0 for none.
+    /// Arrival stamp of the first pending emergency stop, 0 for none.
     estop_at: AtomicU64,
-    /// Sequence of the pending emergency stop (u64::MAX: none readable).
-    estop_sequence: AtomicU64,
+    /// Emergency-stop acks not queued because [`ESTOP_QUEUE`] was full.
+    estop_acks_dropped: AtomicU64,
     /// Arrival stamp of the newest valid heartbeat, 0 for none yet.
     heartbeat_at: AtomicU64,
+    /// Sequence of the newest valid heartbeat plus one, 0 for none yet: a
+    /// heartbeat counts only when its sequence is above it (replays are
+    /// refused).
+    heartbeat_sequence: AtomicU64,
+    /// Signed heartbeats refused because their sequence was not above the
+    /// last accepted one (replays).
+    heartbeats_replayed: AtomicU64,
     /// `StateKind as u8` after the last step.
     state: AtomicU8,
     /// Delay from e-stop arrival to the kernel request [ns], 0 for none.
@@ -161,6 +212,12 @@ enum Outbound {
 pub struct Supervision {
     shared: Arc<Shared>,
     commands: Receiver<CommandMessage>,
+    /// The sample publisher when samples are put from the loop
+    /// ([`SampleQos::from_loop`]).
+    samples: Option<(WireFormat, zenoh::pubsub::Publisher<'static>)>,
+    /// Sequences of the emergency stops that arrived (`None`: unreadable
+    /// payload), in arrival order.
+    estops: Receiver<Option<u64>>,
     outbound: SyncSender<Outbound>,
     sample_decimation: u64,
     status_period: f64,
@@ -189,12 +246,18 @@ impl Supervision {
             let state = kernel.request(Request::Stop, now);
             let delay = stamp(self.shared.epoch).saturating_sub(arrived).max(1);
             self.shared.estop_delay.store(delay, Ordering::Release);
-            let sequence = self.shared.estop_sequence.load(Ordering::Acquire);
-            self.ack(Ack {
-                subject: AckSubject::EmergencyStop,
-                sequence: (sequence != u64::MAX).then_some(sequence),
-                outcome: outcome(state),
-            });
+            // One kernel request, one ack per e-stop that arrived: every
+            // sender learns that its stop was applied.
+            for _ in 0..ESTOP_QUEUE {
+                let Ok(sequence) = self.estops.try_recv() else {
+                    break;
+                };
+                self.ack(Ack {
+                    subject: AckSubject::EmergencyStop,
+                    sequence,
+                    outcome: outcome(state),
+                });
+            }
         }
         self.watch_supervisor(kernel, now);
     }
@@ -216,10 +279,16 @@ impl Supervision {
                 step,
                 time: now,
                 sent_at_ns: wall_clock_ns(),
-                frame: *frame,
-                command: *command,
+                frame: (*frame).into(),
+                command: (*command).into(),
             };
-            if self.outbound.try_send(Outbound::Sample(message)).is_err() {
+            let sent = match &self.samples {
+                Some((format, publisher)) => format
+                    .encode(&message)
+                    .is_ok_and(|bytes| publisher.put(bytes).wait().is_ok()),
+                None => self.outbound.try_send(Outbound::Sample(message)).is_ok(),
+            };
+            if !sent {
                 self.counters.samples_dropped += 1;
             }
         }
@@ -229,9 +298,13 @@ impl Supervision {
             self.last_state = Some(state);
             self.next_status = now + self.status_period;
             self.counters.kernel_events_dropped = kernel.dropped_events();
+            self.counters.heartbeats_replayed =
+                self.shared.heartbeats_replayed.load(Ordering::Acquire);
+            self.counters.estop_acks_dropped =
+                self.shared.estop_acks_dropped.load(Ordering::Acquire);
             let status = KernelStatus {
                 time: now,
-                state,
+                state: state.into(),
                 supervisor_present: self.supervisor_present(),
                 counters: self.counters,
             };
@@ -270,7 +343,7 @@ impl Supervision {
         let request = match message.command {
             SupervisorCommand::StartEstimation => Request::StartEstimation,
             SupervisorCommand::ApproveManipulation { target } => {
-                Request::ApproveManipulation(target)
+                Request::ApproveManipulation(target.into())
             }
             SupervisorCommand::FinishManipulation => Request::FinishManipulation,
             SupervisorCommand::Stop => Request::Stop,
@@ -278,13 +351,17 @@ impl Supervision {
             SupervisorCommand::UpdateLimits { limits } => {
                 let outcome = match kernel.update_limits(limits) {
                     Ok(()) => AckOutcome::Accepted {
-                        state: kernel.state().kind(),
+                        state: kernel.state().kind().into(),
                     },
                     Err(LimitUpdateRefusal::Invalid(error)) => AckOutcome::Refused {
-                        reason: RefuseReason::InvalidLimits { error },
+                        reason: RefuseReason::InvalidLimits {
+                            error: error.into(),
+                        },
                     },
                     Err(LimitUpdateRefusal::NotAllowedInState(state)) => AckOutcome::Refused {
-                        reason: RefuseReason::LimitsNotAllowedInState { state },
+                        reason: RefuseReason::LimitsNotAllowedInState {
+                            state: state.into(),
+                        },
                     },
                 };
                 self.ack(Ack {
@@ -338,7 +415,7 @@ impl Supervision {
             let message = EventMessage {
                 sequence: self.event_sequence,
                 kernel_dropped: kernel.dropped_events(),
-                event,
+                event: event.into(),
             };
             self.event_sequence += 1;
             self.send_reliable(Outbound::Event(message));
@@ -363,9 +440,13 @@ impl Supervision {
 
 fn outcome(result: Result<StateKind, limb_kernel::Refusal>) -> AckOutcome {
     match result {
-        Ok(state) => AckOutcome::Accepted { state },
+        Ok(state) => AckOutcome::Accepted {
+            state: state.into(),
+        },
         Err(refusal) => AckOutcome::Refused {
-            reason: RefuseReason::Kernel { refusal },
+            reason: RefuseReason::Kernel {
+                refusal: refusal.into(),
+            },
         },
     }
 }
@@ -414,17 +495,33 @@ impl Link {
         let shared = Arc::new(Shared {
             epoch: Instant::now(),
             estop_at: AtomicU64::new(0),
-            estop_sequence: AtomicU64::new(u64::MAX),
+            estop_acks_dropped: AtomicU64::new(0),
             heartbeat_at: AtomicU64::new(0),
+            heartbeat_sequence: AtomicU64::new(0),
+            heartbeats_replayed: AtomicU64::new(0),
             state: AtomicU8::new(0),
             estop_delay: AtomicU64::new(0),
             loss_silence: AtomicU64::new(0),
         });
         let (outbound, outbound_rx) = sync_channel(OUTBOUND_QUEUE);
         let (commands_tx, commands) = sync_channel(COMMAND_QUEUE);
+        let (estops_tx, estops) = sync_channel(ESTOP_QUEUE);
         let snapshot = Arc::new(Mutex::new(None::<StateSnapshot>));
 
-        let publishers = Publishers::declare(&session, &keys, format)?;
+        let qos = settings.sample_qos;
+        let sample_publisher = session
+            .declare_publisher(keys.sample())
+            .congestion_control(CongestionControl::Drop)
+            .priority(qos.priority)
+            .express(qos.express)
+            .encoding(format.encoding())
+            .wait()?;
+        let (thread_samples, loop_samples) = if qos.from_loop {
+            (None, Some((format, sample_publisher)))
+        } else {
+            (Some(sample_publisher), None)
+        };
+        let publishers = Publishers::declare(&session, &keys, format, thread_samples)?;
         let publisher = std::thread::Builder::new()
             .name("limb-zenoh-publish".into())
             .spawn({
@@ -433,7 +530,7 @@ impl Link {
             })?;
 
         let subscribers = vec![
-            declare_estop(&session, &keys, format, &shared)?,
+            declare_estop(&session, &keys, format, &shared, estops_tx)?,
             declare_requests(&session, &keys, settings, commands_tx, outbound.clone())?,
             declare_heartbeat(&session, &keys, settings, &shared)?,
         ];
@@ -449,6 +546,8 @@ impl Link {
         let supervision = Supervision {
             shared,
             commands,
+            samples: loop_samples,
+            estops,
             outbound: outbound.clone(),
             sample_decimation: u64::from(settings.sample_decimation),
             status_period: settings.status_period,
@@ -495,7 +594,8 @@ impl Link {
 struct Publishers {
     format: WireFormat,
     event: zenoh::pubsub::Publisher<'static>,
-    sample: zenoh::pubsub::Publisher<'static>,
+    /// `None` when the loop puts the samples itself.
+    sample: Option<zenoh::pubsub::Publisher<'static>>,
     link: zenoh::pubsub::Publisher<'static>,
     ack: zenoh::pubsub::Publisher<'static>,
     status: zenoh::pubsub::Publisher<'static>,
@@ -507,6 +607,7 @@ impl Publishers {
         session: &zenoh::Session,
         keys: &Keys,
         format: WireFormat,
+        sample: Option<zenoh::pubsub::Publisher<'static>>,
     ) -> Result<Self, AdapterError> {
         let declare = |key: String, congestion: CongestionControl, priority: Priority| {
             session
@@ -520,7 +621,7 @@ impl Publishers {
         Ok(Self {
             format,
             event: declare(keys.event(), Block, Priority::InteractiveHigh)?,
-            sample: declare(keys.sample(), Drop, Priority::DataHigh)?,
+            sample,
             link: declare(keys.link(), Block, Priority::InteractiveHigh)?,
             ack: declare(keys.ack(), Block, Priority::InteractiveHigh)?,
             status: declare(keys.kernel_alive(), Drop, Priority::Data)?,
@@ -539,7 +640,10 @@ impl Publishers {
             let result = match message {
                 Outbound::Close => return,
                 Outbound::Event(m) => self.put(&self.event, &m),
-                Outbound::Sample(m) => self.put(&self.sample, &m),
+                Outbound::Sample(m) => match &self.sample {
+                    Some(publisher) => self.put(publisher, &m),
+                    None => Ok(()),
+                },
                 Outbound::Link(m) => self.put(&self.link, &m),
                 Outbound::Ack(m) => self.put(&self.ack, &m),
                 Outbound::Status(status, arm) => {
@@ -582,21 +686,30 @@ fn declare_estop(
     keys: &Keys,
     format: WireFormat,
     shared: &Arc<Shared>,
+    estops: SyncSender<Option<u64>>,
 ) -> Result<zenoh::pubsub::Subscriber<()>, AdapterError> {
     let shared = Arc::clone(shared);
     Ok(session
         .declare_subscriber(keys.emergency_stop())
         .callback(move |sample| {
-            // Any payload stops; a readable one names the stop in the ack.
+            // Any payload stops; a readable one names the stop in its ack.
             let payload = sample.payload().to_bytes();
             let sequence = (payload.len() <= MAX_COMMAND_LENGTH)
                 .then(|| format.decode::<EmergencyStopMessage>(&payload).ok())
                 .flatten()
-                .map_or(u64::MAX, |m| m.sequence);
-            shared.estop_sequence.store(sequence, Ordering::Release);
-            shared
-                .estop_at
-                .store(stamp(shared.epoch), Ordering::Release);
+                .map(|m| m.sequence);
+            // Queue the ack first, then raise the flag: the loop that sees
+            // the flag also finds the ack.
+            if estops.try_send(sequence).is_err() {
+                shared.estop_acks_dropped.fetch_add(1, Ordering::AcqRel);
+            }
+            // Keep the first arrival's stamp when several are pending.
+            let _ = shared.estop_at.compare_exchange(
+                0,
+                stamp(shared.epoch),
+                Ordering::AcqRel,
+                Ordering::Acquire,
+            );
         })
         .wait()?)
 }
@@ -681,10 +794,25 @@ fn declare_heartbeat(
             let signed = key
                 .verify(&key_expr, &payload, attachment.as_deref())
                 .is_ok();
-            if signed && format.decode::<Heartbeat>(&payload).is_ok() {
+            let Some(heartbeat) = signed
+                .then(|| format.decode::<Heartbeat>(&payload).ok())
+                .flatten()
+            else {
+                return;
+            };
+            // Fresh only when its sequence is above every one accepted
+            // before: a captured heartbeat replayed later keeps nothing alive.
+            let marker = heartbeat.sequence.saturating_add(1);
+            let previous = shared
+                .heartbeat_sequence
+                .fetch_max(marker, Ordering::AcqRel);
+            if marker > previous {
                 shared
                     .heartbeat_at
                     .store(stamp(shared.epoch), Ordering::Release);
+            } else {
+                shared.heartbeats_replayed.fetch_add(1, Ordering::AcqRel);
+                tracing::warn!(sequence = heartbeat.sequence, "replayed heartbeat refused");
             }
         })
         .wait()?)
@@ -744,7 +872,7 @@ mod tests {
         CommandKey::new(b"fuzzing key, sixteen+ bytes").unwrap()
     }
 
-    const KEY_EXPR: &str = "limb/fuzz/@v1/cmd/request";
+    const KEY_EXPR: &str = "limb/fuzz/@v2/cmd/request";
 
     proptest! {
         /// Fuzz: arbitrary bytes, signed or not, never panic; unsigned ones

@@ -2,7 +2,7 @@
 //! publishes its heartbeat, collects acks and queries the node.
 //!
 //! Used by the tests, the benchmark and the `limb` tool; a supervisor in
-//! another language follows [`crate::wire`] and [`crate::auth`].
+//! another language follows `PROTOCOL.md`.
 
 use crate::auth::CommandKey;
 use crate::error::AdapterError;
@@ -31,7 +31,8 @@ pub struct Supervisor {
     key: CommandKey,
     request: zenoh::pubsub::Publisher<'static>,
     estop: zenoh::pubsub::Publisher<'static>,
-    next_sequence: u64,
+    /// The lowest sequence number the next message may use.
+    sequence_floor: u64,
     acks: Receiver<Ack>,
     _ack_subscriber: zenoh::pubsub::Subscriber<()>,
     heartbeat: Option<HeartbeatTask>,
@@ -44,8 +45,10 @@ struct HeartbeatTask {
 
 impl Supervisor {
     /// Opens a session with `zenoh_config` for robot `robot_id`, signing
-    /// with `key`. Sequence numbers start at the wall clock in µs, so a
-    /// restarted supervisor stays above what the node last accepted.
+    /// with `key`. Sequence numbers follow the wall clock in µs (see
+    /// [`next_sequence`]), so a restarted supervisor stays above what the
+    /// node last accepted and several supervisors share the node's
+    /// sequence.
     ///
     /// # Errors
     /// [`AdapterError`] for a bad robot id or a Zenoh failure.
@@ -86,7 +89,7 @@ impl Supervisor {
             key,
             request,
             estop,
-            next_sequence: wall_clock_ns() / 1000,
+            sequence_floor: 0,
             acks,
             _ack_subscriber: ack_subscriber,
             heartbeat: None,
@@ -126,8 +129,7 @@ impl Supervisor {
     /// # Errors
     /// [`AdapterError`] when it cannot be encoded or sent.
     pub fn send(&mut self, command: SupervisorCommand) -> Result<u64, AdapterError> {
-        let sequence = self.next_sequence;
-        self.next_sequence += 1;
+        let sequence = next_sequence(&mut self.sequence_floor);
         let payload = self.format.encode(&CommandMessage { sequence, command })?;
         self.send_raw(&payload, Some(&self.key))?;
         Ok(sequence)
@@ -186,8 +188,7 @@ impl Supervisor {
     /// # Errors
     /// [`AdapterError`] when it cannot be sent.
     pub fn emergency_stop(&mut self) -> Result<u64, AdapterError> {
-        let sequence = self.next_sequence;
-        self.next_sequence += 1;
+        let sequence = next_sequence(&mut self.sequence_floor);
         let payload = self.format.encode(&EmergencyStopMessage { sequence })?;
         self.estop.put(payload).wait()?;
         Ok(sequence)
@@ -215,13 +216,13 @@ impl Supervisor {
             .spawn({
                 let stop = Arc::clone(&stop);
                 move || {
-                    let mut sequence = 0;
+                    let mut next = 0;
                     while !stop.load(Ordering::Acquire) {
+                        let sequence = next_sequence(&mut next);
                         if let Ok(payload) = format.encode(&Heartbeat { sequence }) {
                             let signature = key.sign(&key_expr, &payload).to_vec();
                             let _ = publisher.put(payload).attachment(signature).wait();
                         }
-                        sequence += 1;
                         std::thread::sleep(period);
                     }
                 }
@@ -267,6 +268,20 @@ impl Supervisor {
         self.session.close().wait()?;
         Ok(())
     }
+}
+
+/// The next sequence number of a command or heartbeat: the wall clock in
+/// µs since the UNIX epoch, or `next` when that is higher (a clock step
+/// back, or two sends in one µs); advances `next` past it.
+///
+/// The node accepts only numbers above the last it accepted from any
+/// supervisor; numbers taken from one shared clock interleave, so
+/// supervisors started at different times can take turns. Their clocks
+/// must agree to better than the time between their commands.
+pub fn next_sequence(next: &mut u64) -> u64 {
+    let sequence = (wall_clock_ns() / 1000).max(*next);
+    *next = sequence.saturating_add(1);
+    sequence
 }
 
 impl Drop for Supervisor {

@@ -1,11 +1,12 @@
-//! The versioned wire encoding (`@v1`) of every message, in JSON or CBOR.
+//! The versioned wire encoding (`@v2`, see `PROTOCOL.md`) of every
+//! message, in JSON or CBOR.
 //!
 //! # Format
 //! Every payload is one serde value of a type below, encoded as JSON
 //! (readable; `application/json`) or CBOR (compact, for rate;
 //! `application/cbor`, RFC 8949). The node and its supervisors agree on one
 //! [`WireFormat`]; each sample also carries the Zenoh encoding, so a tool
-//! can tell them apart. Field names and enum tags are part of the `@v1`
+//! can tell them apart. Field names and enum tags are part of the `@v2`
 //! contract: a change that old readers would misread gets a new `@vN` key
 //! prefix. Lengths are metres, angles radians, forces newtons, torques
 //! newton-metres, times seconds (kernel time unless said otherwise).
@@ -20,11 +21,12 @@
 //! (times of events stamped at a faulty clock); readers treat them as
 //! missing.
 
-use limb_kernel::arm::{ArmGeometry, JointAngles};
-use limb_kernel::config::{ConfigError, SafetyLimits};
-use limb_kernel::geometry::Point;
-use limb_kernel::trace::TraceEvent;
-use limb_kernel::{Command, KernelConfig, PathSample, Refusal, StateKind};
+use crate::kernel_wire::{
+    CommandReport, Fault, Frame, Joints, KernelEvent, KernelRefusal, PlanarPoint, State,
+};
+use limb_kernel::arm::ArmGeometry;
+use limb_kernel::config::SafetyLimits;
+use limb_kernel::KernelConfig;
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
@@ -131,7 +133,7 @@ pub enum SupervisorCommand {
     /// `Request::ApproveManipulation(target)`.
     ApproveManipulation {
         /// Target joint angles [rad].
-        target: JointAngles,
+        target: Joints,
     },
     /// `Request::FinishManipulation`.
     FinishManipulation,
@@ -153,7 +155,13 @@ pub enum SupervisorCommand {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CommandMessage {
-    /// Strictly increasing per kernel node (replay protection).
+    /// Strictly increasing per kernel node, across all its supervisors
+    /// (replay protection): a command at or below the last decoded, signed
+    /// one is refused as `replayed`. Every signed command that decodes uses
+    /// up its number, whether the kernel then accepts or refuses it, so a
+    /// captured refused command cannot be replayed once the state would
+    /// allow it. Supervisors send max(previous + 1, wall clock in µs since
+    /// the UNIX epoch), so several supervisors share the sequence.
     pub sequence: u64,
     /// What to do.
     pub command: SupervisorCommand,
@@ -170,7 +178,10 @@ pub struct EmergencyStopMessage {
 /// A supervisor heartbeat on `alive/supervisor` (signed).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Heartbeat {
-    /// Counts up from 0 per supervisor.
+    /// Strictly increasing per robot, across all its supervisors: the node
+    /// accepts a heartbeat only above the last one it accepted. Supervisors
+    /// send their wall clock in µs since the UNIX epoch (kept above their
+    /// own previous value), so several supervisors and restarts interleave.
     pub sequence: u64,
 }
 
@@ -195,17 +206,17 @@ pub enum RefuseReason {
     /// The kernel refused the request (its own transition guards).
     Kernel {
         /// The kernel's refusal.
-        refusal: Refusal,
+        refusal: KernelRefusal,
     },
     /// The proposed limits failed `KernelConfig::check`.
     InvalidLimits {
-        /// The first unusable group.
-        error: ConfigError,
+        /// The first unusable group (a `ConfigError` fault).
+        error: Fault,
     },
     /// Limits change only in Grasp, Validated or SafeStop.
     LimitsNotAllowedInState {
         /// The state the kernel was in.
-        state: StateKind,
+        state: State,
     },
 }
 
@@ -216,7 +227,7 @@ pub enum AckOutcome {
     /// Carried out; the kernel is now in `state`.
     Accepted {
         /// The state after the command.
-        state: StateKind,
+        state: State,
     },
     /// Refused; the state did not change.
     Refused {
@@ -260,14 +271,14 @@ impl Ack {
 
 /// A kernel trace event on `telemetry/event`, numbered so a reader sees
 /// loss or reordering.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct EventMessage {
     /// 0, 1, 2, … per node.
     pub sequence: u64,
     /// Events the kernel dropped before the adapter drained them (total).
     pub kernel_dropped: u32,
     /// The event.
-    pub event: TraceEvent,
+    pub event: KernelEvent,
 }
 
 /// One control step on `telemetry/sample` (decimated).
@@ -281,9 +292,9 @@ pub struct SampleMessage {
     /// latency measurements.
     pub sent_at_ns: u64,
     /// The sensor frame.
-    pub frame: PathSample,
+    pub frame: Frame,
     /// The kernel's command.
-    pub command: Command,
+    pub command: CommandReport,
 }
 
 /// A change of the supervisor link on `telemetry/link`.
@@ -314,7 +325,7 @@ pub struct ArmModel {
     /// Forearm length l2 [m].
     pub forearm_length: f64,
     /// Shoulder position, frame S [m].
-    pub shoulder: Point,
+    pub shoulder: PlanarPoint,
 }
 
 impl From<&ArmGeometry> for ArmModel {
@@ -322,7 +333,7 @@ impl From<&ArmGeometry> for ArmModel {
         Self {
             upper_arm_length: arm.upper_arm_length(),
             forearm_length: arm.forearm_length(),
-            shoulder: arm.shoulder(),
+            shoulder: arm.shoulder().into(),
         }
     }
 }
@@ -340,6 +351,12 @@ pub struct NodeCounters {
     pub reliable_dropped: u64,
     /// Kernel trace events lost before being drained.
     pub kernel_events_dropped: u32,
+    /// Signed heartbeats refused because their sequence was not above the
+    /// last accepted one (replays, or a supervisor whose clock is behind).
+    pub heartbeats_replayed: u64,
+    /// Emergency stops applied whose ack was dropped (more than
+    /// [`crate::link::ESTOP_QUEUE`] in one control period).
+    pub estop_acks_dropped: u64,
 }
 
 /// The kernel side's status on `alive/kernel`.
@@ -348,7 +365,7 @@ pub struct KernelStatus {
     /// Kernel time [s].
     pub time: f64,
     /// The kernel's state.
-    pub state: StateKind,
+    pub state: State,
     /// Whether a valid supervisor heartbeat is current.
     pub supervisor_present: bool,
     /// Counters.
@@ -374,7 +391,7 @@ mod tests {
         CommandMessage {
             sequence: 7,
             command: SupervisorCommand::ApproveManipulation {
-                target: JointAngles {
+                target: Joints {
                     shoulder_elevation: 0.6,
                     elbow_flexion: 0.8,
                 },

@@ -127,6 +127,57 @@ fn the_loss_and_the_return_of_the_supervisor_are_published() {
     rig.close();
 }
 
+/// Finding 1 of issue 18: a captured signed heartbeat, replayed after its
+/// supervisor hung, does not keep the node supervised: the loss is
+/// detected, reported, and the replays are counted.
+#[test]
+fn a_replayed_heartbeat_does_not_keep_the_supervisor_present() {
+    let mut rig = rig(RigOptions {
+        on_loss: OnSupervisorLoss::Continue,
+        liveness_timeout: LIVENESS_TIMEOUT,
+        ..RigOptions::default()
+    });
+    let key_expr = rig.supervisor.keys().supervisor_alive();
+    let (tx, captured) = std::sync::mpsc::channel();
+    let _capture = rig
+        .supervisor
+        .session()
+        .declare_subscriber(key_expr.clone())
+        .callback(move |sample| {
+            let attachment = sample.attachment().map(|a| a.to_bytes().to_vec());
+            let _ = tx.send((sample.payload().to_bytes().to_vec(), attachment));
+        })
+        .wait()
+        .unwrap();
+    rig.supervisor.start_heartbeat(HEARTBEAT).unwrap();
+    let (payload, signature) = captured.recv_timeout(TIMEOUT).unwrap();
+    std::thread::sleep(Duration::from_millis(200));
+    rig.supervisor.stop_heartbeat();
+    // The attacker replays the captured heartbeat at twice the rate.
+    for _ in 0..24 {
+        let put = rig.supervisor.session().put(&key_expr, payload.clone());
+        let put = match &signature {
+            Some(signature) => put.attachment(signature.clone()),
+            None => put,
+        };
+        put.wait().unwrap();
+        std::thread::sleep(Duration::from_millis(25));
+    }
+    let silence = rig
+        .node
+        .view()
+        .last_loss_silence()
+        .expect("the supervisor's loss is detected despite the replays");
+    assert!(silence > LIVENESS_TIMEOUT);
+    let status: limb_zenoh::wire::StateSnapshot = rig
+        .supervisor
+        .query(&rig.supervisor.keys().state(), TIMEOUT)
+        .unwrap();
+    assert!(!status.status.supervisor_present);
+    assert!(status.status.counters.heartbeats_replayed >= 20);
+    rig.close();
+}
+
 /// The emergency stop reaches the kernel within one control period of its
 /// arrival while the supervisor's own telemetry subscriber is full and
 /// never drained (1 kHz samples, a 256-sample FIFO nobody reads).

@@ -79,7 +79,9 @@ fn access_control_drops_an_observers_command_but_not_its_emergency_stop() {
         supervisor
     };
     let mut panel = connect("panel", "panel-password");
-    let approve = SupervisorCommand::ApproveManipulation { target: TARGET };
+    let approve = SupervisorCommand::ApproveManipulation {
+        target: TARGET.into(),
+    };
     let dropped = panel.request(approve, Duration::from_millis(500));
     assert!(
         matches!(dropped, Err(AdapterError::Timeout(_))),
@@ -92,7 +94,7 @@ fn access_control_drops_an_observers_command_but_not_its_emergency_stop() {
     assert_eq!(
         ack.outcome,
         AckOutcome::Accepted {
-            state: StateKind::Manipulate
+            state: StateKind::Manipulate.into()
         }
     );
 

@@ -121,6 +121,20 @@ pub enum EstimateError {
     UpperArmFit(CircleFitError),
 }
 
+impl EstimateError {
+    /// Stable numeric code of the error.
+    pub const fn code(&self) -> u16 {
+        match self {
+            EstimateError::PathTooLong => 1,
+            EstimateError::NonFiniteSample => 2,
+            EstimateError::ForearmPhaseTooShort => 3,
+            EstimateError::UpperArmPhaseTooShort => 4,
+            EstimateError::ForearmFit(_) => 5,
+            EstimateError::UpperArmFit(_) => 6,
+        }
+    }
+}
+
 /// Minimum samples a phase needs for a fit.
 pub const MIN_PHASE_SAMPLES: usize = 10;
 

@@ -6,7 +6,7 @@
 
 use limb_kernel::Kernel;
 use limb_zenoh::auth::CommandKey;
-use limb_zenoh::link::{LinkSettings, LivenessPolicy, OnSupervisorLoss};
+use limb_zenoh::link::{LinkSettings, LivenessPolicy, OnSupervisorLoss, SampleQos};
 use limb_zenoh::node::{LoopSettings, Node};
 use limb_zenoh::sensor::ScriptedLift;
 use limb_zenoh::session::{free_loopback_port, peer_config};
@@ -57,6 +57,7 @@ pub fn link_settings(options: &RigOptions) -> LinkSettings {
         format: options.format,
         command_key: key(),
         sample_decimation: 1,
+        sample_qos: SampleQos::BATCHED,
         status_period: 0.05,
         liveness: LivenessPolicy {
             timeout: options.liveness_timeout,

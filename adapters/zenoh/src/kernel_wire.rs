@@ -1,0 +1,601 @@
+//! The wire's own spelling of what the kernel reports: states, requests,
+//! faults, events, frames and commands.
+//!
+//! The kernel's serde names are its Rust names (PascalCase, externally
+//! tagged), so a renamed kernel variant would silently change `@v2`. Every
+//! kernel value therefore goes through a type of this module, built by an
+//! exhaustive `match`: a renamed or added kernel variant stops this crate
+//! from compiling, and a changed spelling breaks the golden-message test
+//! (`tests/golden.rs`), never a deployed supervisor.
+//!
+//! Faults (stop reasons, refusals, estimation, plan, target and
+//! configuration errors) are one shape, [`Fault`]: the kernel's stable
+//! numeric `code`, a snake_case `name`, and what caused it (a nested
+//! fault, a monitor violation, or a free-text detail).
+
+use limb_kernel::arm::JointAngles;
+use limb_kernel::command::CommandMode;
+use limb_kernel::config::ConfigError;
+use limb_kernel::estimation::{CircleFitError, EstimateError};
+use limb_kernel::geometry::{Point, Pose, PoseRate, Wrench};
+use limb_kernel::impedance::Saturation;
+use limb_kernel::lift::LiftEnd;
+use limb_kernel::monitor::{Limit, Violation};
+use limb_kernel::motion::{PlanError, SetPoint};
+use limb_kernel::state::TargetError;
+use limb_kernel::trace::{Cause as KernelCause, Event, TraceEvent};
+use limb_kernel::RefusalReason;
+use limb_kernel::{Command, PathSample, Refusal, Request, StateKind, StopReason};
+use serde::{Deserialize, Serialize};
+
+/// A kernel state.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum State {
+    /// Holding the wrist, no model.
+    Grasp,
+    /// Running the estimation motion.
+    Estimate,
+    /// Holding still with a validated model.
+    Validated,
+    /// Moving the arm to an approved target.
+    Manipulate,
+    /// Latched stop.
+    SafeStop,
+}
+
+impl From<StateKind> for State {
+    fn from(kind: StateKind) -> Self {
+        match kind {
+            StateKind::Grasp => State::Grasp,
+            StateKind::Estimate => State::Estimate,
+            StateKind::Validated => State::Validated,
+            StateKind::Manipulate => State::Manipulate,
+            StateKind::SafeStop => State::SafeStop,
+        }
+    }
+}
+
+/// Joint angles of the arm [rad].
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Joints {
+    /// Upper-arm elevation above the horizontal, q1 [rad].
+    pub shoulder_elevation: f64,
+    /// Elbow flexion q2 [rad]; negative is hyperextension.
+    pub elbow_flexion: f64,
+}
+
+impl From<Joints> for JointAngles {
+    fn from(j: Joints) -> Self {
+        JointAngles {
+            shoulder_elevation: j.shoulder_elevation,
+            elbow_flexion: j.elbow_flexion,
+        }
+    }
+}
+
+impl From<JointAngles> for Joints {
+    fn from(j: JointAngles) -> Self {
+        Joints {
+            shoulder_elevation: j.shoulder_elevation,
+            elbow_flexion: j.elbow_flexion,
+        }
+    }
+}
+
+/// Which request (a refusal or transition names it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RequestKind {
+    /// Grasp → Estimate.
+    StartEstimation,
+    /// Validated → Manipulate.
+    ApproveManipulation,
+    /// Manipulate → Validated.
+    FinishManipulation,
+    /// Any state → SafeStop.
+    Stop,
+    /// SafeStop → Grasp.
+    Reset,
+}
+
+impl From<Request> for RequestKind {
+    fn from(request: Request) -> Self {
+        match request {
+            Request::StartEstimation => RequestKind::StartEstimation,
+            Request::ApproveManipulation(_) => RequestKind::ApproveManipulation,
+            Request::FinishManipulation => RequestKind::FinishManipulation,
+            Request::Stop => RequestKind::Stop,
+            Request::Reset => RequestKind::Reset,
+        }
+    }
+}
+
+/// A crossed monitor limit.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ViolationReport {
+    /// The limit's stable code (`Limit::code`).
+    pub limit: u16,
+    /// The limit's name.
+    pub limit_name: String,
+    /// Measured value, in the limit's unit (null when not finite).
+    pub value: Option<f64>,
+    /// The bound crossed (null when not finite).
+    pub bound: Option<f64>,
+}
+
+/// The wire name of a monitor limit.
+pub fn limit_name(limit: Limit) -> &'static str {
+    match limit {
+        Limit::NonFiniteSensor => "non_finite_sensor",
+        Limit::ClockFault => "clock_fault",
+        Limit::SensorTimeReversed => "sensor_time_reversed",
+        Limit::StaleSensor => "stale_sensor",
+        Limit::ForceMagnitude => "force_magnitude",
+        Limit::Torque => "torque",
+        Limit::ForceRate => "force_rate",
+        Limit::Speed => "speed",
+        Limit::GraspBelowTable => "grasp_below_table",
+        Limit::ElbowBelowTable => "elbow_below_table",
+        Limit::WorkspaceX => "workspace_x",
+        Limit::WorkspaceZ => "workspace_z",
+        Limit::ShoulderElevation => "shoulder_elevation",
+        Limit::ElbowFlexion => "elbow_flexion",
+        Limit::ModelMismatch => "model_mismatch",
+    }
+}
+
+impl From<Violation> for ViolationReport {
+    fn from(v: Violation) -> Self {
+        Self {
+            limit: v.limit.code(),
+            limit_name: limit_name(v.limit).to_owned(),
+            value: finite(v.value),
+            bound: finite(v.bound),
+        }
+    }
+}
+
+/// A kernel fault: stable code, name, and its cause.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Fault {
+    /// The kernel's stable code of this fault within its kind.
+    pub code: u16,
+    /// snake_case name.
+    pub name: String,
+    /// The fault inside it (e.g. an estimation error's fit error).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cause: Option<Box<Fault>>,
+    /// The monitor violation (stops by a monitor, refused targets).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub violation: Option<Box<ViolationReport>>,
+    /// Free text, informative only (model rejections).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub detail: Option<String>,
+}
+
+impl Fault {
+    fn named(code: u16, name: &str) -> Self {
+        Self {
+            code,
+            name: name.to_owned(),
+            cause: None,
+            violation: None,
+            detail: None,
+        }
+    }
+
+    fn caused_by(mut self, cause: Fault) -> Self {
+        self.cause = Some(Box::new(cause));
+        self
+    }
+
+    fn with_violation(mut self, violation: Violation) -> Self {
+        self.violation = Some(Box::new(violation.into()));
+        self
+    }
+}
+
+impl From<PlanError> for Fault {
+    fn from(e: PlanError) -> Self {
+        let name = match e {
+            PlanError::NonFinite => "non_finite",
+            PlanError::NonPositiveSpeed => "non_positive_speed",
+        };
+        Fault::named(e.code(), name)
+    }
+}
+
+impl From<TargetError> for Fault {
+    fn from(e: TargetError) -> Self {
+        let fault = |name| Fault::named(e.code(), name);
+        match e {
+            TargetError::JointLimits(v) => fault("joint_limits").with_violation(v),
+            TargetError::Workspace(v) => fault("workspace").with_violation(v),
+            TargetError::Plan(p) => fault("plan").caused_by(p.into()),
+        }
+    }
+}
+
+impl From<RefusalReason> for Fault {
+    fn from(r: RefusalReason) -> Self {
+        let fault = |name| Fault::named(r.code(), name);
+        match r {
+            RefusalReason::NotAllowedInState => fault("not_allowed_in_state"),
+            RefusalReason::NoFreshMeasurement => fault("no_fresh_measurement"),
+            RefusalReason::InvalidTime => fault("invalid_time"),
+            RefusalReason::Target(t) => fault("target").caused_by(t.into()),
+            RefusalReason::Plan(p) => fault("plan").caused_by(p.into()),
+        }
+    }
+}
+
+/// The circle fits' errors have no kernel code; theirs is here.
+fn circle_fault(e: CircleFitError) -> Fault {
+    match e {
+        CircleFitError::TooFewPoints => Fault::named(1, "too_few_points"),
+        CircleFitError::TooManyPoints => Fault::named(2, "too_many_points"),
+        CircleFitError::Degenerate => Fault::named(3, "degenerate"),
+        CircleFitError::NonFinite => Fault::named(4, "non_finite"),
+    }
+}
+
+impl From<EstimateError> for Fault {
+    fn from(e: EstimateError) -> Self {
+        let fault = |name| Fault::named(e.code(), name);
+        match e {
+            EstimateError::PathTooLong => fault("path_too_long"),
+            EstimateError::NonFiniteSample => fault("non_finite_sample"),
+            EstimateError::ForearmPhaseTooShort => fault("forearm_phase_too_short"),
+            EstimateError::UpperArmPhaseTooShort => fault("upper_arm_phase_too_short"),
+            EstimateError::ForearmFit(c) => fault("forearm_fit").caused_by(circle_fault(c)),
+            EstimateError::UpperArmFit(c) => fault("upper_arm_fit").caused_by(circle_fault(c)),
+        }
+    }
+}
+
+impl From<StopReason> for Fault {
+    fn from(r: StopReason) -> Self {
+        let fault = |name| Fault::named(r.code(), name);
+        match r {
+            StopReason::Monitor(v) => fault("monitor").with_violation(v),
+            StopReason::Operator => fault("operator"),
+            StopReason::EstimationFailed(e) => fault("estimation_failed").caused_by(e.into()),
+            StopReason::ModelRejected(rejection) => {
+                let mut f = fault("model_rejected");
+                f.detail = Some(format!("{rejection:?}"));
+                f
+            }
+            StopReason::PathBufferFull => fault("path_buffer_full"),
+            StopReason::PlanFailed(p) => fault("plan_failed").caused_by(p.into()),
+            StopReason::NonFiniteCommand => fault("non_finite_command"),
+        }
+    }
+}
+
+impl From<ConfigError> for Fault {
+    fn from(e: ConfigError) -> Self {
+        let name = match e {
+            ConfigError::ImpedanceGain => "impedance_gain",
+            ConfigError::Limit => "limit",
+            ConfigError::Range => "range",
+            ConfigError::EstimationMotion => "estimation_motion",
+            ConfigError::PlannedSpeed => "planned_speed",
+            ConfigError::Validation => "validation",
+            ConfigError::LiftShaping => "lift_shaping",
+        };
+        Fault::named(e.code(), name)
+    }
+}
+
+/// A request the kernel refused: which, in which state, why.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct KernelRefusal {
+    /// The request.
+    pub request: RequestKind,
+    /// The state it was refused in.
+    pub state: State,
+    /// Why (a `RefusalReason` fault).
+    pub reason: Fault,
+}
+
+impl From<Refusal> for KernelRefusal {
+    fn from(r: Refusal) -> Self {
+        Self {
+            request: r.request.into(),
+            state: r.state.into(),
+            reason: r.reason.into(),
+        }
+    }
+}
+
+/// What caused a transition.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "cause", rename_all = "snake_case")]
+pub enum Cause {
+    /// A request.
+    Request {
+        /// Which.
+        request: RequestKind,
+    },
+    /// The estimate passed validation at the end of the motion.
+    ModelValidated,
+    /// A stop.
+    Stop {
+        /// Why (a `StopReason` fault).
+        reason: Fault,
+    },
+}
+
+/// One decision of the kernel, at kernel time `time` [s].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "event", rename_all = "snake_case")]
+pub enum KernelEvent {
+    /// The state changed.
+    Transition {
+        /// Kernel time [s] (null when the clock was not finite).
+        time: Option<f64>,
+        /// State left.
+        from: State,
+        /// State entered.
+        to: State,
+        /// Why.
+        #[serde(flatten)]
+        cause: Cause,
+    },
+    /// A request was refused; the state did not change.
+    Refused {
+        /// Kernel time [s] (null when the clock was not finite).
+        time: Option<f64>,
+        /// What and why.
+        refusal: KernelRefusal,
+    },
+    /// The estimation lift ended (Estimate goes on: settling, then the
+    /// refinement).
+    LiftEnded {
+        /// Kernel time [s] (null when the clock was not finite).
+        time: Option<f64>,
+        /// Why it ended.
+        end: LiftEndReport,
+    },
+}
+
+/// Why the estimation lift ended.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "reason", rename_all = "snake_case")]
+pub enum LiftEndReport {
+    /// The upper arm swept the target arc.
+    ArcReached,
+    /// The joint envelope came within the margin of a joint limit.
+    JointMargin {
+        /// The limit's stable code (`Limit::code`).
+        limit: u16,
+        /// The limit's name.
+        limit_name: String,
+    },
+    /// The planned lift and its extension were complete.
+    MotionComplete,
+}
+
+impl From<LiftEnd> for LiftEndReport {
+    fn from(end: LiftEnd) -> Self {
+        match end {
+            LiftEnd::ArcReached => LiftEndReport::ArcReached,
+            LiftEnd::JointMargin(limit) => LiftEndReport::JointMargin {
+                limit: limit.code(),
+                limit_name: limit_name(limit).to_owned(),
+            },
+            LiftEnd::MotionComplete => LiftEndReport::MotionComplete,
+        }
+    }
+}
+
+fn finite(value: f64) -> Option<f64> {
+    value.is_finite().then_some(value)
+}
+
+impl From<TraceEvent> for KernelEvent {
+    fn from(e: TraceEvent) -> Self {
+        let time = finite(e.time);
+        match e.event {
+            Event::Transition { from, to, cause } => KernelEvent::Transition {
+                time,
+                from: from.into(),
+                to: to.into(),
+                cause: match cause {
+                    KernelCause::Request(r) => Cause::Request { request: r.into() },
+                    KernelCause::ModelValidated => Cause::ModelValidated,
+                    KernelCause::Stop(reason) => Cause::Stop {
+                        reason: reason.into(),
+                    },
+                },
+            },
+            Event::Refused(refusal) => KernelEvent::Refused {
+                time,
+                refusal: refusal.into(),
+            },
+            Event::LiftEnded(end) => KernelEvent::LiftEnded {
+                time,
+                end: end.into(),
+            },
+        }
+    }
+}
+
+/// x, z [m] and an angle or their rates, frame S.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Planar {
+    /// Horizontal, toward the shoulder [m] (or m/s, m/s²).
+    pub x: f64,
+    /// Vertical, up; the table is z = 0 [m] (or m/s, m/s²).
+    pub z: f64,
+    /// Forearm elevation [rad] (or rad/s, rad/s²).
+    pub psi: f64,
+}
+
+impl From<Pose> for Planar {
+    fn from(p: Pose) -> Self {
+        Self {
+            x: p.x,
+            z: p.z,
+            psi: p.psi,
+        }
+    }
+}
+
+impl From<PoseRate> for Planar {
+    fn from(p: PoseRate) -> Self {
+        Self {
+            x: p.x,
+            z: p.z,
+            psi: p.psi,
+        }
+    }
+}
+
+/// A point x, z [m], frame S.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PlanarPoint {
+    /// Horizontal [m].
+    pub x: f64,
+    /// Vertical [m].
+    pub z: f64,
+}
+
+impl From<Point> for PlanarPoint {
+    fn from(p: Point) -> Self {
+        Self { x: p.x, z: p.z }
+    }
+}
+
+/// A wrench at the grasp, frame S.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct WrenchReport {
+    /// Horizontal force [N].
+    pub fx: f64,
+    /// Vertical force [N].
+    pub fz: f64,
+    /// Torque about +y [N m].
+    pub ty: f64,
+}
+
+impl From<Wrench> for WrenchReport {
+    fn from(w: Wrench) -> Self {
+        Self {
+            fx: w.fx,
+            fz: w.fz,
+            ty: w.ty,
+        }
+    }
+}
+
+/// One sensor frame.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Frame {
+    /// Measurement time stamp [s, kernel clock].
+    pub time: f64,
+    /// Measured grasp pose.
+    pub pose: Planar,
+    /// Measured external wrench at the grasp.
+    pub wrench: WrenchReport,
+}
+
+impl From<PathSample> for Frame {
+    fn from(s: PathSample) -> Self {
+        Self {
+            time: s.time,
+            pose: s.pose.into(),
+            wrench: s.wrench.into(),
+        }
+    }
+}
+
+/// How the robot treats a command.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Mode {
+    /// Follow the set-point.
+    Track,
+    /// Zero motion.
+    Hold,
+    /// Latched stop: zero motion and zero wrench.
+    Stop,
+}
+
+/// A set-point of the robot's impedance controller.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SetPointReport {
+    /// Equilibrium pose [m, m, rad].
+    pub pose: Planar,
+    /// Its velocity [m/s, m/s, rad/s].
+    pub velocity: Planar,
+    /// Its acceleration [m/s², m/s², rad/s²].
+    pub acceleration: Planar,
+}
+
+impl From<SetPoint> for SetPointReport {
+    fn from(s: SetPoint) -> Self {
+        Self {
+            pose: s.pose.into(),
+            velocity: s.velocity.into(),
+            acceleration: s.acceleration.into(),
+        }
+    }
+}
+
+/// Saturations that acted on a command.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct SaturationReport {
+    /// The force magnitude was limited.
+    pub force: bool,
+    /// The torque was limited.
+    pub torque: bool,
+    /// The set-point speed was limited.
+    pub speed: bool,
+    /// An input was not finite; the wrench was replaced by zero.
+    pub non_finite: bool,
+}
+
+impl From<Saturation> for SaturationReport {
+    fn from(s: Saturation) -> Self {
+        Self {
+            force: s.force,
+            torque: s.torque,
+            speed: s.speed,
+            non_finite: s.non_finite,
+        }
+    }
+}
+
+/// The kernel's command of one step.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CommandReport {
+    /// State after the step.
+    pub state: State,
+    /// How to treat it.
+    pub mode: Mode,
+    /// Set-point (null: hold the current position).
+    pub set_point: Option<SetPointReport>,
+    /// Wrench overlay at the grasp.
+    pub wrench: WrenchReport,
+    /// Saturations that acted.
+    pub saturation: SaturationReport,
+}
+
+impl From<Command> for CommandReport {
+    fn from(c: Command) -> Self {
+        Self {
+            state: c.state.into(),
+            mode: match c.mode {
+                CommandMode::Track => Mode::Track,
+                CommandMode::Hold => Mode::Hold,
+                CommandMode::Stop => Mode::Stop,
+            },
+            set_point: c.set_point.map(Into::into),
+            wrench: c.wrench.into(),
+            saturation: c.saturation.into(),
+        }
+    }
+}

@@ -1,0 +1,68 @@
+//! `limb zenoh` processes on loopback.
+
+use serde_json::Value;
+use std::process::{Command, Stdio};
+
+/// Finding 6 of issue 18: the CLI installs a `tracing` subscriber, so a
+/// node's refusal of an unsigned command is logged on its stderr (with the
+/// default filter, and with a `RUST_LOG` filter).
+#[test]
+fn a_node_logs_the_commands_it_refuses() {
+    let dir = std::env::temp_dir().join(format!("limb-zenoh-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let key = dir.join("key");
+    let wrong = dir.join("wrong-key");
+    std::fs::write(&key, "the robot's shared secret\n").unwrap();
+    std::fs::write(&wrong, "somebody else's secret\n").unwrap();
+    for rust_log in [None, Some("limb_zenoh=warn,zenoh=off")] {
+        let port = std::net::TcpListener::bind("127.0.0.1:0")
+            .unwrap()
+            .local_addr()
+            .unwrap()
+            .port();
+        let endpoint = format!("tcp/127.0.0.1:{port}");
+        let mut node = Command::new(env!("CARGO_BIN_EXE_limb"));
+        node.args([
+            "zenoh", "node", "--robot", "cli-test", "--listen", &endpoint,
+        ])
+        .arg("--key-file")
+        .arg(&key)
+        .args(["--seconds", "4"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped());
+        match rust_log {
+            Some(filter) => node.env("RUST_LOG", filter),
+            None => node.env_remove("RUST_LOG"),
+        };
+        let node = node.spawn().unwrap();
+        let send = Command::new(env!("CARGO_BIN_EXE_limb"))
+            .args([
+                "zenoh",
+                "send",
+                "--robot",
+                "cli-test",
+                "--connect",
+                &endpoint,
+            ])
+            .arg("--key-file")
+            .arg(&wrong)
+            .arg("stop")
+            .output()
+            .unwrap();
+        assert!(
+            send.status.success(),
+            "{}",
+            String::from_utf8_lossy(&send.stderr)
+        );
+        let ack: Value = serde_json::from_slice(&send.stdout).unwrap();
+        assert_eq!(ack["outcome"]["reason"], "unauthorised", "{ack}");
+        let node = node.wait_with_output().unwrap();
+        let log = String::from_utf8_lossy(&node.stderr);
+        assert!(node.status.success(), "{log}");
+        assert!(
+            log.contains("command refused") && log.contains("Unauthorised"),
+            "RUST_LOG={rust_log:?}: {log}"
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
