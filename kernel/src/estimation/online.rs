@@ -27,10 +27,9 @@
 //! after, the provisional shoulder widened by 3σ.
 //!
 //! # Bounds
-//! Per call: one moment update, one 3 × 3 solve and a few trigonometric
-//! functions, except the call that ends the forearm phase, which adds the
-//! window's [`DEPARTURE_WINDOW`] elbow points at once. No loop depends on
-//! the path length.
+//! Per call: at most [`CATCH_UP_PER_SAMPLE`] moment updates (each one elbow
+//! point: a sine and a cosine), one 3 × 3 solve and a few trigonometric
+//! functions. No loop depends on the path length.
 
 use super::moments::{CircleMoments, MomentFit};
 pub use super::phase::{
@@ -50,6 +49,9 @@ pub const PROVISIONAL_ARC: f64 = 0.3;
 /// few points just after the split fit a small, confident-looking circle
 /// with a large arc; its radius is uncertain by more than this.
 pub const PROVISIONAL_PRECISION: f64 = 0.05;
+/// Elbow points the upper-arm moments take per recorded sample: the newest
+/// and up to five of the window left pending at the split.
+pub const CATCH_UP_PER_SAMPLE: usize = 6;
 /// Fewest samples in a provisional fit.
 pub const PROVISIONAL_SAMPLES: usize = 20;
 
@@ -183,10 +185,7 @@ impl OnlineEstimator {
                 }
             }
             OnlinePhase::Forearm => self.record_forearm(path, index, sample),
-            OnlinePhase::UpperArm => {
-                self.add_elbow(path, index);
-                self.update_upper_arm();
-            }
+            OnlinePhase::UpperArm => self.catch_up(path, index),
         }
     }
 
@@ -224,15 +223,24 @@ impl OnlineEstimator {
                 .max(self.forearm_added);
             self.phase = OnlinePhase::UpperArm;
             self.upper_arm_added = self.forearm_end;
-            // Catch up on the window: at most DEPARTURE_WINDOW points.
-            for _ in 0..DEPARTURE_WINDOW {
-                if self.upper_arm_added > index {
-                    break;
-                }
-                self.add_elbow(path, self.upper_arm_added);
-            }
-            self.update_upper_arm();
+            self.catch_up(path, index);
         }
+    }
+
+    /// Adds the elbow points of `path[upper_arm_added..=index]`, at most
+    /// [`CATCH_UP_PER_SAMPLE`] of them, oldest first, and refits. At the
+    /// split the window's [`DEPARTURE_WINDOW`] samples are pending; they are
+    /// absorbed over the next ten samples (0.1 s) instead of in one step
+    /// (50 elbow points, each a sine and a cosine: 0.8 million instructions
+    /// in soft-float `f64` on a Cortex-M7).
+    fn catch_up(&mut self, path: &[PathSample], index: usize) {
+        for _ in 0..CATCH_UP_PER_SAMPLE {
+            if self.upper_arm_added > index {
+                break;
+            }
+            self.add_elbow(path, self.upper_arm_added);
+        }
+        self.update_upper_arm();
     }
 
     /// Adds the elbow point of `path[index]` under the provisional forearm.

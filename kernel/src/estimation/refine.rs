@@ -36,10 +36,13 @@ use nalgebra::{Matrix3, Vector3};
 
 /// Gauss-Newton passes per circle.
 pub const ITERATIONS: usize = 5;
-/// Path samples a kernel step may process. At ≈ 100 flops each this is
-/// ≈ 6 400 flops per step (measured: `cargo bench -p limb-kernel --bench
-/// estimators`, "conclusion step").
-pub const SAMPLES_PER_STEP: usize = 64;
+/// Path samples a kernel step may process. An elbow point costs a sine, a
+/// cosine and a square root: ≈ 12 500 instructions in soft-float `f64` on a
+/// Cortex-M7 (64 samples were 817 560 instructions, 1.36 ms at 600 MHz, in
+/// `firmware/session.sh`); 16 keep a slice near 0.2 million (≈ 0.35 ms).
+/// On the host a slice is ≈ 1 µs (`cargo bench -p limb-verification
+/// --bench step`); a refinement is ≈ 700 slices (0.7 s at 1 kHz).
+pub const SAMPLES_PER_STEP: usize = 16;
 /// Cauchy scale as a multiple of the previous pass's RMS residual.
 pub const SCALE_MULTIPLE: f64 = 3.0;
 /// Smallest Cauchy scale [m]: 3 × the position noise of `plant.md`.
