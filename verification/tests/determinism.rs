@@ -111,12 +111,14 @@ impl Input {
 fn session_inputs() -> Vec<Input> {
     let arm = arm(0.28, 0.19);
     let mut inputs = Vec::new();
-    for i in 0..3200u32 {
+    // At these 100 Hz frames the estimation ends ≈ 30 s in (the refinement
+    // runs one 16-sample slice per step, ≈ 7 s here); approve at 42 s.
+    for i in 0..4500u32 {
         let t = f64::from(i) * FRAME_PERIOD;
         if i == 1 {
             inputs.push(Input::Request(Request::StartEstimation, t));
         }
-        if i == 3000 {
+        if i == 4200 {
             inputs.push(Input::Request(Request::ApproveManipulation(TARGET), t));
         }
         let frame = lift_frame(&arm, t.min(29.5));
