@@ -301,11 +301,7 @@ impl Kernel {
     fn geometry_monitors(&self) -> (JointLimitMonitor, WorkspaceMonitor) {
         let l = &self.config.limits;
         (
-            JointLimitMonitor {
-                shoulder_elevation: l.shoulder_elevation,
-                elbow_flexion: l.elbow_flexion,
-                max_model_mismatch: l.max_model_mismatch,
-            },
+            JointLimitMonitor::from_limits(l),
             WorkspaceMonitor {
                 x: l.workspace_x,
                 z: l.workspace_z,

@@ -570,11 +570,7 @@ mod verification {
     #[cfg_attr(kani, kani::stub(libm::cos, crate::kani_stubs::stub::cos))]
     pub fn verify_req_sm_003_targets_are_checked() {
         let l = SafetyLimits::default();
-        let joints = JointLimitMonitor {
-            shoulder_elevation: l.shoulder_elevation,
-            elbow_flexion: l.elbow_flexion,
-            max_model_mismatch: l.max_model_mismatch,
-        };
+        let joints = JointLimitMonitor::from_limits(&l);
         let workspace = WorkspaceMonitor {
             x: l.workspace_x,
             z: l.workspace_z,

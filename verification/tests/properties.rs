@@ -332,12 +332,8 @@ proptest! {
         elbow in prop_oneof![-4.0f64..4.0, Just(f64::NAN), Just(f64::NEG_INFINITY)],
     ) {
         let config = KernelConfig::default();
-        let l = &config.limits;
-        let monitor = limb_kernel::monitor::joint_limits::JointLimitMonitor {
-            shoulder_elevation: l.shoulder_elevation,
-            elbow_flexion: l.elbow_flexion,
-            max_model_mismatch: l.max_model_mismatch,
-        };
+        let monitor =
+            limb_kernel::monitor::joint_limits::JointLimitMonitor::from_limits(&config.limits);
         let envelope = limb_kernel::estimation::online::JointEnvelope {
             max_shoulder_elevation: shoulder,
             min_elbow_flexion: elbow,

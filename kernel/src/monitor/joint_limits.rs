@@ -4,7 +4,7 @@
 
 use super::{at_most, within, Limit, Verdict, Violation};
 use crate::arm::ArmGeometry;
-use crate::config::Interval;
+use crate::config::{Interval, SafetyLimits};
 use crate::estimation::online::JointEnvelope;
 use crate::geometry::Pose;
 
@@ -20,6 +20,15 @@ pub struct JointLimitMonitor {
 }
 
 impl JointLimitMonitor {
+    /// The monitor of the configured `limits`.
+    pub fn from_limits(limits: &SafetyLimits) -> Self {
+        Self {
+            shoulder_elevation: limits.shoulder_elevation,
+            elbow_flexion: limits.elbow_flexion,
+            max_model_mismatch: limits.max_model_mismatch,
+        }
+    }
+
     /// Verdict on the measured grasp pose under the arm model.
     pub fn check(&self, arm: &ArmGeometry, pose: Pose) -> Verdict {
         let (q, mismatch) = arm
@@ -100,11 +109,7 @@ mod verification {
     #[cfg_attr(kani, kani::stub(libm::cos, crate::kani_stubs::stub::cos))]
     pub fn verify_req_mon_005_joint_limit_monitor_is_total() {
         let l = SafetyLimits::default();
-        let monitor = JointLimitMonitor {
-            shoulder_elevation: l.shoulder_elevation,
-            elbow_flexion: l.elbow_flexion,
-            max_model_mismatch: l.max_model_mismatch,
-        };
+        let monitor = JointLimitMonitor::from_limits(&l);
         let arm = validated_arm();
         let pose = if kani::any() { any_pose() } else { HOLD };
         let verdict = monitor.check(arm.geometry(), pose);
@@ -144,11 +149,7 @@ mod verification {
     #[cfg_attr(kani, kani::proof)]
     pub fn verify_req_mon_011_envelope_monitor_trips_beyond_limits() {
         let l = SafetyLimits::default();
-        let monitor = JointLimitMonitor {
-            shoulder_elevation: l.shoulder_elevation,
-            elbow_flexion: l.elbow_flexion,
-            max_model_mismatch: l.max_model_mismatch,
-        };
+        let monitor = JointLimitMonitor::from_limits(&l);
         let envelope = JointEnvelope {
             max_shoulder_elevation: kani::any(),
             min_elbow_flexion: kani::any(),
