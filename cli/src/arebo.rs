@@ -11,6 +11,14 @@
 //!   calibrates, then runs the supervisor (unassisted, or weight support
 //!   with α = A) in torque mode, sending the torque target each frame;
 //!   JSON summary.
+//! * `limb arebo run --kernel --device PATH [--seconds S] [--heading H]
+//!   [--clock host|robot] [--until-stopped] [--log FILE] [--zenoh ...]`:
+//!   the limb kernel's session (Grasp → Estimate → Validated → Manipulate)
+//!   on AREBO, the cuff on the wrist of the arm lying on its table
+//!   (`limb_arebo::robot`), under the scripted operator or a Zenoh
+//!   supervisor; a thin shell over `limb-session` like `limb kuka run`.
+//! * `limb arebo serve --held-arm [--lock-step]`: the simulated device
+//!   holding the kernel's reference arm at the wrist (for `run --kernel`).
 //!
 //! A safe stop (stale data, a limit, a device error or status bit, a port
 //! failure) commands the motors off, prints the JSON with a `stop` object
@@ -18,16 +26,21 @@
 //! `run`.
 
 use crate::error::{print_json, CliError};
+use crate::session_log::{run_robot, SessionArgs};
 use clap::Subcommand;
 use limb_arebo::calibration::{ValidatedArmModel, CALIBRATION_PHASE};
 use limb_arebo::control::{GravityParameters, Mode};
 use limb_arebo::human::ArmMass;
-use limb_arebo::link::{self, FaultSwitch, Session, SessionState, StopCause};
+use limb_arebo::link::{
+    self, DevicePacing, FaultSwitch, LinkError, Session, SessionState, StopCause,
+};
 use limb_arebo::protocol::{Command, ControlType};
 use limb_arebo::recording::{self, Calibration, CalibrationError, CalibrationSettings};
+use limb_arebo::robot::{AreboRobot, AreboStop};
 use limb_arebo::safety::SafetyLimits;
 use limb_arebo::sim;
 use limb_arebo::supervisor::{Output, Sample, Supervisor};
+use limb_session::{ArrivalClock, SessionPlan};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -46,6 +59,16 @@ pub enum AreboCommand {
         /// How long to serve [s].
         #[arg(long, default_value_t = 60.0)]
         seconds: f64,
+        /// The cuff holds the wrist of the kernel's reference arm (l1
+        /// 0.30 m, l2 0.20 m, on its table; `limb_arebo::held_arm`), not the
+        /// shoulder joint model.
+        #[arg(long)]
+        held_arm: bool,
+        /// In torque mode, wait for the host's target after each frame
+        /// (the device's clock is then the simulation's: use `run --clock
+        /// robot`).
+        #[arg(long)]
+        lock_step: bool,
     },
     /// Calibrate the arm model against a device.
     Calibrate {
@@ -70,6 +93,16 @@ pub enum AreboCommand {
         /// Gearbox play compensated on θ1..θ3 [deg] (0: a robot without play).
         #[arg(long, default_value_t = 1.0)]
         backlash_deg: f64,
+        /// Run the limb kernel's session instead of the weight support
+        /// (no calibration: the kernel estimates the arm by lifting it).
+        #[arg(long)]
+        kernel: bool,
+        /// With --kernel: heading of frame S's x axis (wrist → shoulder)
+        /// about AREBO's base z axis [rad].
+        #[arg(long, default_value_t = limb_arebo::held_arm::REFERENCE_HEADING)]
+        heading: f64,
+        #[command(flatten)]
+        session: SessionArgs,
     },
 }
 
@@ -77,7 +110,11 @@ pub enum AreboCommand {
 pub fn run(command: AreboCommand) -> Result<(), CliError> {
     match command {
         AreboCommand::Sim { seed } => simulate(seed),
-        AreboCommand::Serve { seconds } => serve(seconds),
+        AreboCommand::Serve {
+            seconds,
+            held_arm,
+            lock_step,
+        } => serve(seconds, held_arm, lock_step),
         AreboCommand::Calibrate {
             device,
             backlash_deg,
@@ -85,9 +122,26 @@ pub fn run(command: AreboCommand) -> Result<(), CliError> {
         AreboCommand::Run {
             device,
             seconds,
+            kernel: true,
+            heading,
+            session,
+            ..
+        } => kernel_session(&device, seconds, heading, &session),
+        AreboCommand::Run {
+            device,
+            seconds,
             alpha,
             backlash_deg,
-        } => stream(&device, seconds, alpha, backlash_deg),
+            session,
+            ..
+        } => {
+            if session.any() {
+                return Err(CliError::BadInput(
+                    "--zenoh, --until-stopped and --log need --kernel".into(),
+                ));
+            }
+            stream(&device, seconds, alpha, backlash_deg)
+        }
     }
 }
 
@@ -115,7 +169,7 @@ fn simulate(seed: u64) -> Result<(), CliError> {
     }))
 }
 
-fn serve(seconds: f64) -> Result<(), CliError> {
+fn serve(seconds: f64, held_arm: bool, lock_step: bool) -> Result<(), CliError> {
     if !(seconds.is_finite() && seconds > 0.0) {
         return Err(CliError::BadInput(format!(
             "--seconds must be positive, got {seconds}"
@@ -139,20 +193,95 @@ fn serve(seconds: f64) -> Result<(), CliError> {
         }
     });
     let frames = (seconds / sim::SAMPLE_PERIOD) as usize;
+    let period = Duration::from_secs_f64(sim::SAMPLE_PERIOD);
     println!("{}", pty.path.display());
-    let handle = link::spawn_device(
-        device,
-        sim::Setup::default(),
-        trajectory,
-        frames,
-        Duration::from_secs_f64(sim::SAMPLE_PERIOD),
-        FaultSwitch::default(),
-    )
+    let handle = match (held_arm, lock_step) {
+        (false, true) => return Err(CliError::BadInput("--lock-step needs --held-arm".into())),
+        (false, false) => link::spawn_device(
+            device,
+            sim::Setup::default(),
+            trajectory,
+            frames,
+            period,
+            FaultSwitch::default(),
+        ),
+        (true, lock_step) => link::spawn_held_arm(
+            device,
+            frames,
+            if lock_step {
+                DevicePacing::LockStep
+            } else {
+                DevicePacing::Wall(period)
+            },
+        ),
+    }
     .map_err(|e| CliError::Internal(e.to_string()))?;
     handle
         .join()
         .map_err(|_| CliError::Internal("device thread panicked".into()))?;
     Ok(())
+}
+
+/// `limb arebo run --kernel`: the kernel's session on AREBO, a thin shell
+/// over `limb-session` (as `limb kuka run`). A device stop (status or
+/// error bits, the link's own stop) prints the summary with the stop and
+/// exits 3.
+fn kernel_session(
+    device: &Path,
+    seconds: f64,
+    heading: f64,
+    options: &SessionArgs,
+) -> Result<(), CliError> {
+    let duration = Duration::try_from_secs_f64(seconds)
+        .map_err(|error| CliError::BadInput(format!("--seconds {seconds}: {error}")))?;
+    if !heading.is_finite() {
+        return Err(CliError::BadInput(format!(
+            "--heading {heading}: not finite"
+        )));
+    }
+    let clock = options.clock()?;
+    let limits = match clock {
+        ArrivalClock::Host => SafetyLimits::default(),
+        ArrivalClock::Robot => SafetyLimits::judged_by_kernel(),
+    };
+    let session = Session::open(device, limits)
+        .map_err(|e| CliError::BadInput(format!("{}: {e}", device.display())))?;
+    let mut robot =
+        match AreboRobot::start(session, heading, GravityParameters::ASSUMED, Some(duration)) {
+            Ok(robot) => robot,
+            Err(LinkError::Stopped(cause)) => return stopped(json!({ "model": null }), cause),
+            Err(e) => return Err(CliError::Internal(e.to_string())),
+        };
+    robot.arrival_clock(clock);
+    let plan = SessionPlan {
+        rate: 1.0 / sim::SAMPLE_PERIOD,
+        ..SessionPlan::default()
+    };
+    let ended = run_robot(&mut robot, options, plan)?;
+    robot.switch_off();
+    let record = robot.record();
+    let outcome = ended.outcome.as_ref().ok();
+    let summary = json!({
+        "kernel_state": format!("{:?}", ended.kernel.state().kind()),
+        "kernel_steps": outcome.map(|o| o.steps),
+        "stale_steps": outcome.map(|o| o.stale_steps),
+        "frames": record.frames,
+        "silent_polls": record.silent_polls,
+        "packet_gaps": robot.session().packet_gaps(),
+        "events": ended.events.json(),
+        "model": outcome.and_then(|o| o.model).map(|m| json!({
+            "l1": m.upper_arm_length, "l2": m.forearm_length,
+            "shoulder": [m.shoulder.x, m.shoulder.z], "elbow": [m.elbow.x, m.elbow.z],
+        })),
+    });
+    match ended.outcome {
+        Ok(_) => print_json(&summary),
+        Err(AreboStop::Device(violation)) => stopped(summary, StopCause::Violation(violation)),
+        Err(AreboStop::Link(cause) | AreboStop::Io(LinkError::Stopped(cause))) => {
+            stopped(summary, cause)
+        }
+        Err(AreboStop::Io(e)) => Err(CliError::Internal(e.to_string())),
+    }
 }
 
 fn open(device: &Path) -> Result<Session, CliError> {

@@ -9,6 +9,6 @@ pub fn run() -> Result<(), CliError> {
     let config = KernelConfig::default();
     config
         .check()
-        .map_err(|error| CliError::Internal(format!("default configuration invalid: {error:?}")))?;
+        .map_err(|error| CliError::Internal(format!("default configuration invalid: {error}")))?;
     print_json(&config)
 }

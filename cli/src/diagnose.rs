@@ -1,4 +1,4 @@
-//! `limb diagnose LOG.csv --l1 M --l2 M [--json] [--report FILE.html]`
+//! `limb diagnose LOG.csv [--l1 M --l2 M] [--json] [--report FILE.html]`
 //! and `limb diagnose --self-check N [--seed S] [--json]`
 //! (`../shared/spec/cli.md`): where the sim-to-real gap lies, which
 //! unmodelled effect causes it, how far it shrinks on held-out data.
@@ -7,6 +7,7 @@
 
 use crate::error::{emit, print_json, CliError};
 use indicatif::{ProgressBar, ProgressStyle};
+use limb_diagnosis::arm::Lengths;
 use limb_diagnosis::report::{self, Subject};
 use limb_diagnosis::selfcheck::{self, Summary};
 use limb_diagnosis::verdict::{diagnose, Diagnosis};
@@ -20,11 +21,11 @@ pub struct DiagnoseArgs {
     /// The "real" log (plant.md format; ground-truth columns are ignored).
     #[arg(required_unless_present = "self_check")]
     log: Option<PathBuf>,
-    /// Upper-arm length of the sim [m].
-    #[arg(long, required_unless_present = "self_check")]
+    /// Upper-arm length of the sim [m], held fixed (absent: fitted).
+    #[arg(long, requires = "l2")]
     l1: Option<f64>,
-    /// Forearm length of the sim [m].
-    #[arg(long, required_unless_present = "self_check")]
+    /// Forearm length of the sim [m], held fixed (absent: fitted).
+    #[arg(long, requires = "l1")]
     l2: Option<f64>,
     /// Print one JSON object on stdout.
     #[arg(long)]
@@ -71,10 +72,12 @@ pub fn run(args: &DiagnoseArgs) -> Result<(), CliError> {
     if let Some(logs) = args.self_check {
         return self_check(logs, args.seed, threads, args.json);
     }
-    let (Some(log), Some(l1), Some(l2)) = (&args.log, args.l1, args.l2) else {
-        return Err(CliError::BadInput(
-            "diagnose needs LOG, --l1 and --l2".into(),
-        ));
+    let Some(log) = &args.log else {
+        return Err(CliError::BadInput("diagnose needs LOG".into()));
+    };
+    let lengths = match (args.l1, args.l2) {
+        (Some(l1), Some(l2)) => Lengths::Given(l1, l2),
+        _ => Lengths::Fitted,
     };
     let records =
         limb_sim::log::read(log).map_err(|error| CliError::BadInput(error.to_string()))?;
@@ -88,7 +91,7 @@ pub fn run(args: &DiagnoseArgs) -> Result<(), CliError> {
             bar.set_message(p.candidate.to_string());
         }
     };
-    let diagnosed = diagnose(l1, l2, &records, threads, &tell).map_err(|error| {
+    let diagnosed = diagnose(lengths, &records, threads, &tell).map_err(|error| {
         use limb_diagnosis::verdict::DiagnoseError as E;
         let text = format!("{}: {error}", log.display());
         match error {
@@ -108,6 +111,7 @@ pub fn run(args: &DiagnoseArgs) -> Result<(), CliError> {
                 selection: &diagnosed.selection,
                 source: &log.display().to_string(),
                 held_out: &diagnosed.diagnosis.held_out,
+                facts: &facts(&diagnosed.diagnosis),
             },
         )?;
     }
@@ -117,8 +121,90 @@ pub fn run(args: &DiagnoseArgs) -> Result<(), CliError> {
     emit(&human(&diagnosed.diagnosis))
 }
 
+/// The arm's findings for the report: the corrected arm beside the
+/// kernel's estimate, and what remains unexplained.
+fn facts(d: &Diagnosis) -> Vec<(String, String)> {
+    let a = &d.arm;
+    let mut facts = vec![(
+        if a.given {
+            "arm (given)".to_string()
+        } else {
+            "arm (fitted, corrected for the effects)".to_string()
+        },
+        format!(
+            "l1 = {:.4} m, l2 = {:.4} m, shoulder ({:.4}, {:.4}) m",
+            a.l1, a.l2, a.shoulder[0], a.shoulder[1]
+        ),
+    )];
+    if let Some([l1, l2]) = a.estimate {
+        facts.push((
+            "kernel estimate (limb estimate, auto)".to_string(),
+            format!(
+                "l1 = {l1:.4} m, l2 = {l2:.4} m (corrected − estimate: {:+.1} mm, {:+.1} mm)",
+                1e3 * (a.l1 - l1),
+                1e3 * (a.l2 - l2)
+            ),
+        ));
+    }
+    facts.push((
+        "unexplained".to_string(),
+        match &d.unexplained {
+            None => "nothing beyond the noise".to_string(),
+            Some(u) => format!(
+                "{:.1} % of the held-out gap, {} {}{}",
+                100.0 * u.share,
+                u.signals.join(", "),
+                match (u.t_start, u.t_end) {
+                    (Some(a), Some(b)) => format!("from {a:.2} s to {b:.2} s"),
+                    _ => String::new(),
+                },
+                u.band_hz.map_or(String::new(), |[lo, hi]| format!(
+                    ", band {lo:.2}-{hi:.2} Hz"
+                ))
+            ),
+        },
+    ));
+    facts
+}
+
 fn human(d: &Diagnosis) -> String {
     let mut text = format!("effect   {}\n", d.effect);
+    for e in &d.effects {
+        text += &format!(
+            "  added  {:<17} held-out gap after {:.3}  {}\n",
+            e.effect,
+            e.held_out_after,
+            e.parameters_text()
+        );
+    }
+    let a = &d.arm;
+    text += &format!(
+        "arm      l1 = {:.4} m, l2 = {:.4} m, shoulder ({:.4}, {:.4}) m{}\n",
+        a.l1,
+        a.l2,
+        a.shoulder[0],
+        a.shoulder[1],
+        match (a.given, a.estimate) {
+            (true, _) => " (given)".to_string(),
+            (false, Some([l1, l2])) =>
+                format!(" (fitted, corrected for the effects; kernel estimate {l1:.4}, {l2:.4})"),
+            (false, None) => " (fitted, corrected for the effects)".to_string(),
+        }
+    );
+    if let Some(u) = &d.unexplained {
+        text += &format!(
+            "unexplained {:.1} % of the gap, {}",
+            100.0 * u.share,
+            u.signals.join(", ")
+        );
+        if let (Some(a), Some(b)) = (u.t_start, u.t_end) {
+            text += &format!(" from {a:.2} s to {b:.2} s");
+        }
+        if let Some([lo, hi]) = u.band_hz {
+            text += &format!(", band {lo:.2}-{hi:.2} Hz");
+        }
+        text += "\n";
+    }
     let g = &d.gap;
     text += &format!(
         "gap      {:.3} -> {:.3} ({}; shrink {:.1} %, held out: {})\n",
@@ -175,7 +261,7 @@ fn self_check(logs: usize, seed: u64, threads: usize, json: bool) -> Result<(), 
     let summary = selfcheck::run(logs, seed, threads, &|case| {
         if let Some(bar) = &progress {
             bar.inc(1);
-            bar.set_message(format!("{} -> {}", case.truth, case.answer));
+            bar.set_message(format!("{:?} -> {:?}", case.truth, case.added));
         }
     })
     .map_err(|error| CliError::Internal(error.to_string()))?;
@@ -191,7 +277,8 @@ fn self_check(logs: usize, seed: u64, threads: usize, json: bool) -> Result<(), 
 fn confusion(s: &Summary) -> String {
     let short = |name: &str| name.chars().take(6).collect::<String>();
     let mut text = format!(
-        "blind self-check: {} logs, seed {}\nrows: withheld effect; columns: answer\n{:>17}",
+        "blind self-check: {} logs, seed {}, lengths not given\n\
+         single-effect and clean logs; rows: withheld effect; columns: first effect added\n{:>17}",
         s.logs, s.seed, ""
     );
     for name in &s.classes {
@@ -206,14 +293,25 @@ fn confusion(s: &Summary) -> String {
         text += "\n";
     }
     text += &format!(
-        "top-1 accuracy {:.1} %\nmedian held-out shrink when right {:.1} %\n\
+        "single-effect and clean logs: {}, top-1 accuracy {:.1} %\n\
+         median held-out shrink when right {:.1} %\n\
          median relative parameter error when right {:.1} %\n\
-         none answered for effects > 2x noise: {} of {}\n",
+         none answered for effects > 2x noise: {} of {}\n\
+         clean logs accused: {} of {}\n\
+         corrected arm within 3 mm: {} of {} single-effect logs\n\
+         pairs with both effects named: {} of {}\n",
+        s.singles,
         100.0 * s.top1_accuracy,
         100.0 * s.median_shrink,
         100.0 * s.median_parameter_error,
         s.none_for_large_effects,
-        s.large_effects
+        s.large_effects,
+        s.clean_accused,
+        s.clean,
+        s.arm_within_tolerance,
+        s.single_effects,
+        s.pairs_both_named,
+        s.pairs
     );
     text
 }

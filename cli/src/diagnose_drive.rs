@@ -106,6 +106,7 @@ pub fn run(args: &DiagnoseDriveArgs) -> Result<(), CliError> {
                 selection: &diagnosed.selection,
                 source: &source,
                 held_out: &diagnosed.diagnosis.held_out_data,
+                facts: &[],
             },
         )?;
     }

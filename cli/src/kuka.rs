@@ -1,25 +1,26 @@
 //! `limb kuka ...`: tools for the KUKA FRI adapter (`limb-kuka`).
 
 use clap::Subcommand;
-use limb_kernel::KernelConfig;
 use limb_kuka::faults::parse_schedule;
-use limb_kuka::kernel_controller::{KernelController, LoopSettings, Overlay};
-use limb_kuka::loopback::{ClientCounts, CLIENT_RECEIVE_TIMEOUT, MAX_JOINT_STEP};
 use limb_kuka::messages::{
     ClientCommandMode, ConnectionQuality, FriCommandMessage, FriMonitoringMessage, JointValues,
     MessageHeader, SessionState,
 };
+use limb_kuka::robot::{ArrivalClock, FriRobot, Overlay};
 use limb_kuka::sim_controller::{Pacing, SimController, SimSettings};
-use limb_kuka::udp::FriClient;
+use limb_kuka::udp::{
+    ClientCounts, FriClient, CLIENT_RECEIVE_TIMEOUT, MAX_JOINT_STEP, UNPACED_CLIENT_RECEIVE_TIMEOUT,
+};
 use limb_kuka::vectors::{example_command, example_monitoring, SESSION_STATES};
 use limb_kuka::{decode_command, decode_monitoring, encode_command, encode_monitoring, FriVersion};
-use limb_sim::operator::SessionPlan;
+use limb_session::SessionPlan;
 use limb_sim::PlantParameters;
 use serde_json::{json, Value};
 use std::net::SocketAddr;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use crate::error::{print_json, CliError};
+use crate::session_log::{run_robot, SessionArgs};
 
 /// KUKA FRI subcommands.
 #[derive(Subcommand)]
@@ -64,6 +65,8 @@ pub enum KukaCommand {
         /// base z axis [rad].
         #[arg(long, default_value_t = limb_kuka::sim_controller::DEFAULT_HEADING)]
         heading: f64,
+        #[command(flatten)]
+        session: SessionArgs,
     },
     /// Run the simulated FRI controller (robot side, reference plant,
     /// optional faults) sending to a client; prints counts and round-trip
@@ -116,53 +119,55 @@ fn parse_overlay(text: &str) -> Result<Overlay, CliError> {
     }
 }
 
-fn run_client(
-    fri_version: &str,
+/// Options of `limb kuka run`.
+struct ClientOptions<'a> {
+    fri_version: &'a str,
     port: u16,
     seconds: f64,
-    overlay: &str,
+    overlay: &'a str,
     heading: f64,
-) -> Result<(), CliError> {
-    let version = parse_version(fri_version)?;
-    let overlay = parse_overlay(overlay)?;
-    let duration = Duration::try_from_secs_f64(seconds)
-        .map_err(|error| CliError::BadInput(format!("--seconds {seconds}: {error}")))?;
+    session: &'a SessionArgs,
+}
+
+fn run_client(options: &ClientOptions<'_>) -> Result<(), CliError> {
+    let version = parse_version(options.fri_version)?;
+    let overlay = parse_overlay(options.overlay)?;
+    let duration = Duration::try_from_secs_f64(options.seconds)
+        .map_err(|error| CliError::BadInput(format!("--seconds {}: {error}", options.seconds)))?;
+    let heading = options.heading;
     if !heading.is_finite() {
         return Err(CliError::BadInput(format!(
             "--heading {heading}: not finite"
         )));
     }
-    let address = SocketAddr::from(([0, 0, 0, 0], port));
-    let mut client = FriClient::bind(address, version, MAX_JOINT_STEP, CLIENT_RECEIVE_TIMEOUT)
-        .map_err(|error| CliError::BadInput(format!("{address}: {error}")))?;
-    let settings = LoopSettings {
-        overlay,
-        heading,
-        plan: SessionPlan::default(),
+    let clock = options.session.clock()?;
+    let receive_timeout = match clock {
+        ArrivalClock::Host => CLIENT_RECEIVE_TIMEOUT,
+        ArrivalClock::Robot => UNPACED_CLIENT_RECEIVE_TIMEOUT,
     };
-    let mut controller =
-        KernelController::new(KernelConfig::default(), settings).map_err(CliError::BadInput)?;
-    let mut counts = ClientCounts::default();
-    let start = Instant::now();
-    while start.elapsed() < duration {
-        let outcome = client
-            .run_cycle(&mut controller)
-            .map_err(|error| CliError::Internal(error.to_string()))?;
-        counts.tally(&outcome);
-    }
-    let record = controller.record();
+    let address = SocketAddr::from(([0, 0, 0, 0], options.port));
+    let client = FriClient::bind(address, version, MAX_JOINT_STEP, receive_timeout)
+        .map_err(|error| CliError::BadInput(format!("{address}: {error}")))?;
+    let mut robot = FriRobot::new(client, overlay, heading, Some(duration));
+    robot.arrival_clock(clock);
+    let session = run_robot(&mut robot, options.session, SessionPlan::default())?;
+    let outcome = session
+        .outcome
+        .map_err(|error| CliError::Internal(error.to_string()))?;
+    let (kernel, events) = (session.kernel, session.events);
+    let record = robot.record();
     print_json(&json!({
         "fri_version": version.to_string(),
         "overlay": format!("{overlay:?}"),
-        "client": counts_json(&counts),
-        "kernel_state": format!("{:?}", controller.kernel().state().kind()),
-        "kernel_steps": record.steps,
-        "stale_steps": record.stale_steps,
+        "client": counts_json(&record.client),
+        "kernel_state": format!("{:?}", kernel.state().kind()),
+        "kernel_steps": outcome.steps,
+        "stale_steps": outcome.stale_steps,
         "missing_measurements": record.missing_measurements,
         "inverse_failures": record.inverse_failures,
-        "overlay_lost_stops": record.overlay_lost_stops,
-        "events": record.events.iter().map(|(time, what)| json!({"time": time, "what": what})).collect::<Vec<_>>(),
-        "model": record.model.map(|m| json!({
+        "overlay_lost_stops": outcome.unfollowed_stops,
+        "events": events.json(),
+        "model": outcome.model.map(|m| json!({
             "l1": m.upper_arm_length, "l2": m.forearm_length,
             "shoulder": [m.shoulder.x, m.shoulder.z], "elbow": [m.elbow.x, m.elbow.z],
         })),
@@ -279,7 +284,15 @@ pub fn run(command: KukaCommand) -> Result<(), CliError> {
             seconds,
             overlay,
             heading,
-        } => run_client(&fri_version, port, seconds, &overlay, heading),
+            session,
+        } => run_client(&ClientOptions {
+            fri_version: &fri_version,
+            port,
+            seconds,
+            overlay: &overlay,
+            heading,
+            session: &session,
+        }),
         KukaCommand::SimController {
             fri_version,
             client,

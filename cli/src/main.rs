@@ -11,7 +11,9 @@ mod estimate;
 mod kuka;
 mod population;
 mod run;
+mod session_log;
 mod simulate;
+mod soak;
 mod zenoh;
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
@@ -64,6 +66,9 @@ enum Command {
     /// KUKA LBR iiwa FRI adapter tools.
     #[command(subcommand)]
     Kuka(kuka::KukaCommand),
+    /// Soak runs that count what was lost: sessions with seeded faults or
+    /// emergency stops over real loopback sockets for a wall-clock time.
+    Soak(soak::SoakArgs),
 }
 
 /// What is logged when `RUST_LOG` is not set: the adapters' warnings
@@ -109,7 +114,10 @@ fn main() {
         std::process::exit(error.exit_code());
     }
     let result: Result<(), CliError> = match cli.command {
-        Command::Run(args) => run::run(&args),
+        Command::Run(args) => match matches.subcommand_matches("run") {
+            Some(sub) => run::run(&args, sub),
+            None => Err(CliError::Internal("run: no argument matches".into())),
+        },
         Command::Population(args) => population::run(&args),
         Command::Config => config::run(),
         Command::Estimate { log, method, json } => estimate::run(&log, method, json),
@@ -122,6 +130,7 @@ fn main() {
         Command::Arebo { command } => arebo::run(command),
         Command::Kuka(command) => kuka::run(command),
         Command::DiagnoseDrive(args) => diagnose_drive::run(&args),
+        Command::Soak(args) => soak::run(args),
     };
     if let Err(error) = result {
         eprintln!("limb: {error}");

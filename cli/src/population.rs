@@ -116,12 +116,13 @@ fn run_arm(l1: f64, l2: f64, seed: u64, config: &KernelConfig) -> Result<ArmOutc
     params.seed = seed;
     let plant = limb_sim::Plant::new(params).map_err(CliError::Internal)?;
     let mut kernel = Box::new(
-        Kernel::new(*config).map_err(|e| CliError::Internal(format!("configuration: {e:?}")))?,
+        Kernel::new(*config).map_err(|e| CliError::Internal(format!("configuration: {e}")))?,
     );
     let report = run_session(
         &mut kernel,
         &mut ReferencePlant(plant),
         &SessionPlan::default(),
+        None,
     );
     let estimate_joints = report
         .joint_extremes

@@ -14,36 +14,47 @@
 //! Time: the kernel runs at `--rate` (1 kHz, the FRI rate, by default); the
 //! plant integrates at its own 0.5 ms step in between.
 //!
-//! The loop itself is [`limb_sim::session::run`], the same `no_std` code
-//! the firmware runs on a Cortex-M7; this runner observes it (step wall
-//! time, joint extremes, the `--log` rows, the events). `--digest` prints
-//! the session in the canonical text the firmware prints, for comparing
-//! the two.
+//! The loop itself is [`limb_session::run`], the same `no_std` code the
+//! firmware runs on a Cortex-M7 and every robot adapter runs; the plant is
+//! its robot ([`ReferenceRobot`]), the scripted operator its supervisor.
+//! This runner observes it (step wall time, joint extremes, the events)
+//! and writes the session log (`--log`). `--digest` prints the session in
+//! the canonical text the firmware prints, for comparing the two.
 
 use crate::error::{emit, print_json, CliError};
+use crate::session_log::{Log, LogFile};
 use limb_kernel::geometry::Point;
 use limb_kernel::motion::SetPoint;
 use limb_kernel::trace::{Cause, Event, TraceEvent};
 use limb_kernel::{Command, Kernel, KernelConfig, StateKind};
-use limb_sim::log::Record;
-pub use limb_sim::operator::SessionPlan;
-use limb_sim::operator::{describe, FittedModel};
-use limb_sim::session::{self, Digest, EventLine, Observer};
+use limb_session::digest::{Digest, EventLine};
+use limb_session::operator::describe;
+pub use limb_session::SessionPlan;
+use limb_session::{FittedModel, Frame, Observer, Operator};
+use limb_sim::robot::ReferenceRobot;
 use limb_sim::Measurement;
+use limb_zenoh::kernel_wire::KernelEvent;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::time::Instant;
 
 /// A plant the kernel can close the loop on, with its ground truth.
-pub trait ClosedLoopPlant: session::ClosedLoopPlant {
+pub trait ClosedLoopPlant: limb_sim::closed_loop::ClosedLoopPlant {
     /// The person's true joint angles now, exact [rad]: shoulder elevation
     /// q1, elbow flexion q2.
     fn joints(&self) -> [f64; 2];
-    /// Ground truth as the log records it (potentiometer-rounded joints,
-    /// elbow and shoulder, frame S).
-    fn logged_truth(&self) -> limb_sim::Truth;
     /// Ground truth: l1, l2 [m], elbow at t = 0 and shoulder [m], frame S.
-    fn truth(&self) -> Truth;
+    fn arm_truth(&self) -> Truth;
+}
+
+impl<P: ClosedLoopPlant + ?Sized> ClosedLoopPlant for &mut P {
+    fn joints(&self) -> [f64; 2] {
+        (**self).joints()
+    }
+
+    fn arm_truth(&self) -> Truth {
+        (**self).arm_truth()
+    }
 }
 
 /// Ground truth of the plant's arm.
@@ -66,6 +77,10 @@ pub struct Line {
     pub time: f64,
     /// What happened, in words.
     pub what: String,
+    /// What happened, as data: the Zenoh wire's spelling of the kernel's
+    /// event (`transition` with its cause, `refused` with the refusal,
+    /// `lift_ended`; PROTOCOL.md, `EventMessage.event`).
+    pub event: KernelEvent,
 }
 
 /// The fitted model against the truth.
@@ -133,10 +148,7 @@ pub struct SessionReport {
     pub step_time: StepTime,
     /// Joint extremes per state (lower-case state name).
     pub joint_extremes: BTreeMap<String, JointExtremes>,
-    /// Every step's measurement, command and truth, for `--log`.
-    #[serde(skip)]
-    pub log: Vec<Record>,
-    /// FNV-1a hash of every command issued, hex (`limb_sim::session::CommandHash`).
+    /// FNV-1a hash of every command issued, hex (`limb_session::digest::CommandHash`).
     pub command_hash: String,
     /// The session in the canonical text of `--digest`.
     #[serde(skip)]
@@ -152,38 +164,23 @@ struct Recorder {
     started: Option<Instant>,
     durations: Vec<(f64, StateKind)>,
     joint_extremes: BTreeMap<String, JointExtremes>,
-    log: Vec<Record>,
 }
 
-impl<P: ClosedLoopPlant + ?Sized> Observer<P> for Recorder {
-    fn before_step(&mut self, _: &P, _: &Measurement, _: StateKind) {
+impl<P: ClosedLoopPlant> Observer<ReferenceRobot<P>> for Recorder {
+    fn before_step(&mut self, _: &ReferenceRobot<P>, _: &Frame, _: StateKind) {
         self.started = Some(Instant::now());
     }
 
-    fn after_step(
-        &mut self,
-        plant: &P,
-        measurement: &Measurement,
-        state: StateKind,
-        command: &Command,
-    ) {
+    fn after_step(&mut self, robot: &ReferenceRobot<P>, _: &Frame, state: StateKind, _: &Command) {
         let elapsed = self.started.map_or(0.0, |s| s.elapsed().as_secs_f64());
         self.durations.push((elapsed, state));
-        let [q1, q2] = plant.joints();
+        let [q1, q2] = robot.plant().joints();
         let extremes = self
             .joint_extremes
             .entry(format!("{state:?}").to_lowercase())
             .or_default();
         extremes.max_hyperextension = extremes.max_hyperextension.max(-q2);
         extremes.max_shoulder_elevation = extremes.max_shoulder_elevation.max(q1);
-        self.log.push(Record {
-            time: measurement.time,
-            command: command.set_point.map(|s| s.pose),
-            pose: measurement.pose,
-            lateral: Some(measurement.lateral),
-            wrench: measurement.wrench,
-            truth: Some(plant.logged_truth()),
-        });
     }
 
     fn event(&mut self, event: &TraceEvent) {
@@ -191,6 +188,7 @@ impl<P: ClosedLoopPlant + ?Sized> Observer<P> for Recorder {
         let line = Line {
             time: event.time,
             what: describe(event),
+            event: KernelEvent::from(*event),
         };
         if let Event::Transition {
             cause: Cause::Stop(limb_kernel::StopReason::Monitor(_)),
@@ -204,15 +202,24 @@ impl<P: ClosedLoopPlant + ?Sized> Observer<P> for Recorder {
     }
 }
 
-/// Runs one session of `kernel` on `plant` following `plan`.
+/// Runs one session of `kernel` on `plant` following `plan`, writing the
+/// session log to `log` when given.
 pub fn run_session(
     kernel: &mut Kernel,
     plant: &mut dyn ClosedLoopPlant,
     plan: &SessionPlan,
+    log: Option<&mut Log>,
 ) -> SessionReport {
-    let truth = plant.truth();
-    let mut recorder = Recorder::default();
-    let outcome = session::run(kernel, plant, plan, &mut recorder);
+    let truth = plant.arm_truth();
+    let mut robot = ReferenceRobot::new(plant, plan.rate, plan.timeout);
+    let mut observers = (Recorder::default(), log);
+    let Ok(outcome) = limb_session::run(
+        kernel,
+        &mut robot,
+        &mut Operator::new(*plan),
+        &mut observers,
+    );
+    let (mut recorder, _) = observers;
     let mut digest = recorder.digest;
     digest.push_str(&Digest(&outcome).to_string());
     SessionReport {
@@ -226,7 +233,6 @@ pub fn run_session(
         steps: outcome.steps,
         step_time: step_time(&mut recorder.durations),
         joint_extremes: recorder.joint_extremes,
-        log: recorder.log,
         command_hash: format!("{:016x}", outcome.command_hash),
         digest,
     }
@@ -328,7 +334,7 @@ pub fn human(report: &SessionReport, header: &str) -> String {
 /// The reference plant of `limb-sim` behind [`ClosedLoopPlant`].
 pub struct ReferencePlant(pub limb_sim::Plant);
 
-impl session::ClosedLoopPlant for ReferencePlant {
+impl limb_sim::closed_loop::ClosedLoopPlant for ReferencePlant {
     fn time(&self) -> f64 {
         self.0.time()
     }
@@ -340,6 +346,10 @@ impl session::ClosedLoopPlant for ReferencePlant {
     fn advance(&mut self, set_point: Option<&SetPoint>, duration: f64) {
         limb_sim::closed_loop::advance(&mut self.0, set_point, duration);
     }
+
+    fn truth(&self) -> limb_sim::Truth {
+        self.0.truth()
+    }
 }
 
 impl ClosedLoopPlant for ReferencePlant {
@@ -347,11 +357,7 @@ impl ClosedLoopPlant for ReferencePlant {
         self.0.state().0
     }
 
-    fn logged_truth(&self) -> limb_sim::Truth {
-        self.0.truth()
-    }
-
-    fn truth(&self) -> Truth {
+    fn arm_truth(&self) -> Truth {
         let a = &self.0.params().arm;
         let t = self.0.truth();
         Truth {
@@ -364,23 +370,22 @@ impl ClosedLoopPlant for ReferencePlant {
 }
 
 /// `limb run`: the session on the reference plant.
-pub fn run(args: &RunArgs) -> Result<(), CliError> {
+/// `matches` are the subcommand's (where `--effect` and `--set` stand).
+pub fn run(args: &RunArgs, matches: &clap::ArgMatches) -> Result<(), CliError> {
     let config = config(args)?;
     let mut params = limb_sim::PlantParameters::new(args.l1, args.l2);
     params.seed = args.seed;
-    let plant = limb_sim::Plant::new(params).map_err(CliError::BadInput)?;
+    let effects = crate::simulate::effects(&args.effect, &args.set, matches)?;
+    let plant = limb_sim::Plant::with_effects(params, effects).map_err(CliError::BadInput)?;
     let mut plant = ReferencePlant(plant);
     let mut kernel = Box::new(
         Kernel::new(config)
-            .map_err(|e| CliError::BadInput(format!("kernel configuration: {e:?}")))?,
+            .map_err(|e| CliError::BadInput(format!("kernel configuration: {e}")))?,
     );
     let plan = SessionPlan::default();
-    let report = run_session(&mut kernel, &mut plant, &plan);
-    if let Some(file) = &args.log {
-        std::fs::write(file, limb_sim::log::to_csv(&report.log)).map_err(|error| {
-            CliError::BadInput(format!("{}: cannot write the log: {error}", file.display()))
-        })?;
-    }
+    let mut log = LogFile::create(args.log.as_deref())?;
+    let report = run_session(&mut kernel, &mut plant, &plan, log.as_mut());
+    LogFile::finish(log, args.log.as_deref())?;
     let header = format!(
         "limb run: reference plant, arm l1 = {:.3} m, l2 = {:.3} m, noise seed {}, kernel at {:.0} Hz, \
          force limit {:.1} N",
@@ -401,6 +406,13 @@ pub struct RunArgs {
     /// Measurement-noise seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// An unmodelled effect of plant.md switched on in the plant
+    /// (repeatable, as for `limb simulate`).
+    #[arg(long)]
+    pub effect: Vec<String>,
+    /// A parameter KEY=VALUE of the preceding --effect (SI units).
+    #[arg(long)]
+    pub set: Vec<String>,
     /// Overrides the kernel's force limit [N] (e.g. below the lift force, to see a safe stop).
     #[arg(long)]
     pub max_force: Option<f64>,
@@ -425,7 +437,7 @@ pub fn config(args: &RunArgs) -> Result<KernelConfig, CliError> {
     }
     config
         .check()
-        .map_err(|error| CliError::BadInput(format!("invalid kernel configuration: {error:?}")))?;
+        .map_err(|error| CliError::BadInput(format!("invalid kernel configuration: {error}")))?;
     Ok(config)
 }
 

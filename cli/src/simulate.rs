@@ -48,9 +48,26 @@ pub struct SimulateArgs {
     pub out: PathBuf,
 }
 
+/// The plant's effects from `--effect NAME --set KEY=VALUE ...`
+/// (`limb simulate` and `limb run`): each `--set` is paired with the
+/// `--effect` before it, using the positions clap recorded in `matches`
+/// (the subcommand's).
+///
+/// # Errors
+/// [`CliError::BadInput`] for a `--set` before any `--effect`, an unknown
+/// effect or parameter, or an invalid combination.
+pub fn effects(
+    effect: &[String],
+    set: &[String],
+    matches: &ArgMatches,
+) -> Result<Effects, CliError> {
+    Effects::new(&group(effect, set, matches)?)
+        .map_err(|error| CliError::BadInput(error.to_string()))
+}
+
 /// Pairs each `--effect` with the `--set`s that follow it, using the
 /// positions clap recorded.
-fn group(args: &SimulateArgs, matches: &ArgMatches) -> Result<Vec<Effect>, CliError> {
+fn group(effect: &[String], set: &[String], matches: &ArgMatches) -> Result<Vec<Effect>, CliError> {
     let positions = |id: &str| -> Vec<usize> {
         matches
             .indices_of(id)
@@ -58,15 +75,15 @@ fn group(args: &SimulateArgs, matches: &ArgMatches) -> Result<Vec<Effect>, CliEr
             .unwrap_or_default()
     };
     let (effect_at, set_at) = (positions("effect"), positions("set"));
-    let mut settings: Vec<Vec<&str>> = vec![Vec::new(); args.effect.len()];
-    for (set, at) in args.set.iter().zip(set_at) {
+    let mut settings: Vec<Vec<&str>> = vec![Vec::new(); effect.len()];
+    for (set, at) in set.iter().zip(set_at) {
         let owner = effect_at
             .iter()
             .rposition(|&e| e < at)
             .ok_or_else(|| CliError::BadInput(format!("--set {set} comes before any --effect")))?;
         settings[owner].push(set);
     }
-    args.effect
+    effect
         .iter()
         .zip(&settings)
         .map(|(name, settings)| {
@@ -81,8 +98,7 @@ fn group(args: &SimulateArgs, matches: &ArgMatches) -> Result<Vec<Effect>, CliEr
 /// [`CliError::BadInput`] for invalid parameters or effects, or an output
 /// file that cannot be written; [`CliError::Internal`] if the run fails.
 pub fn run(args: &SimulateArgs, matches: &ArgMatches) -> Result<(), CliError> {
-    let effects = Effects::new(&group(args, matches)?)
-        .map_err(|error| CliError::BadInput(error.to_string()))?;
+    let effects = effects(&args.effect, &args.set, matches)?;
     let mut params = PlantParameters::new(args.l1, args.l2);
     params.seed = args.seed;
     params.noise = args.noise == NoiseArg::On;

@@ -1,5 +1,7 @@
-//! `limb zenoh ...`: run a supervised node on the synthetic lift, send a
-//! supervisory command or an emergency stop, query a node. The wire
+//! `limb zenoh ...`: run a supervised node on the reference plant (a
+//! `limb-session` session starting in Grasp), send a supervisory command or
+//! an emergency stop, query a node. [`NodeLink`] is the Zenoh side any
+//! robot command can take (`limb kuka run --zenoh`). The wire
 //! contract is `adapters/zenoh/PROTOCOL.md`.
 //!
 //! ```sh
@@ -10,12 +12,16 @@
 //! ```
 
 use crate::error::{print_json, CliError};
+use crate::session_log::LogFile;
 use clap::{Args, Subcommand, ValueEnum};
+use limb_kernel::{Kernel, KernelConfig};
+use limb_sim::robot::ReferenceRobot;
 use limb_zenoh::auth::CommandKey;
 use limb_zenoh::kernel_wire::{Joints, State};
-use limb_zenoh::link::{LinkSettings, LivenessPolicy, OnSupervisorLoss, SampleQos};
-use limb_zenoh::node::{LoopSettings, Node};
-use limb_zenoh::sensor::ScriptedLift;
+use limb_zenoh::link::{
+    Link, LinkSettings, LivenessPolicy, OnSupervisorLoss, SampleQos, Supervision,
+};
+use limb_zenoh::node::Node;
 use limb_zenoh::session::peer_config;
 use limb_zenoh::supervisor::Supervisor;
 use limb_zenoh::wire::{SupervisorCommand, WireFormat};
@@ -70,30 +76,94 @@ struct Peer {
     format: Format,
 }
 
+/// The Zenoh side of a robot's session: who supervises it and how
+/// (`--robot` and `--key-file` are required where it is used).
+#[derive(Args)]
+pub struct NodeLink {
+    /// Robot id (key prefix `limb/<robot>/@v2`).
+    #[arg(long)]
+    robot: Option<String>,
+    /// Endpoints to connect to, e.g. tcp/127.0.0.1:7447.
+    #[arg(long)]
+    connect: Vec<String>,
+    /// Payload encoding.
+    #[arg(long, value_enum, default_value = "json")]
+    format: Format,
+    /// Endpoints to listen on, e.g. tcp/127.0.0.1:7447.
+    #[arg(long)]
+    listen: Vec<String>,
+    /// File holding the shared command secret (at least 16 bytes).
+    #[arg(long)]
+    key_file: Option<PathBuf>,
+    /// What to do when the supervisor's heartbeat stops.
+    #[arg(long, value_enum, default_value = "stop")]
+    on_supervisor_loss: Policy,
+    /// Supervisor heartbeat timeout [s].
+    #[arg(long, default_value_t = 0.25)]
+    liveness_timeout: f64,
+}
+
+impl NodeLink {
+    /// Opens the link for a kernel configured with `config`.
+    ///
+    /// # Errors
+    /// [`CliError::BadInput`] for a bad setting, key file or endpoint.
+    pub fn open(&self, config: KernelConfig) -> Result<(Link, Supervision), CliError> {
+        let (zenoh_config, settings) = self.settings()?;
+        Link::open(zenoh_config, &settings, config).map_err(bad_input)
+    }
+
+    fn settings(&self) -> Result<(limb_zenoh::zenoh::Config, LinkSettings), CliError> {
+        let required = |flag: &str| CliError::BadInput(format!("{flag} is required"));
+        let settings = LinkSettings {
+            robot_id: self.robot.clone().ok_or_else(|| required("--robot"))?,
+            format: self.format.into(),
+            command_key: read_key(
+                self.key_file
+                    .as_ref()
+                    .ok_or_else(|| required("--key-file"))?,
+            )?,
+            sample_decimation: 1,
+            sample_qos: SampleQos::BATCHED,
+            status_period: 0.1,
+            liveness: LivenessPolicy {
+                timeout: positive_duration(self.liveness_timeout, "--liveness-timeout")?,
+                on_loss: match self.on_supervisor_loss {
+                    Policy::Stop => OnSupervisorLoss::Stop,
+                    Policy::Continue => OnSupervisorLoss::Continue,
+                },
+            },
+        };
+        let config = peer_config(&self.listen, &self.connect, LEASE_MS).map_err(bad_input)?;
+        Ok((config, settings))
+    }
+}
+
 #[derive(Subcommand)]
 enum Action {
-    /// Run a node on the synthetic lift (starts in Validated) for a while.
+    /// Run a node: the reference plant in Grasp, supervised, for a while.
     Node {
         #[command(flatten)]
-        peer: Peer,
-        /// Endpoints to listen on, e.g. tcp/127.0.0.1:7447.
-        #[arg(long)]
-        listen: Vec<String>,
-        /// File holding the shared command secret (at least 16 bytes).
-        #[arg(long)]
-        key_file: PathBuf,
+        link: NodeLink,
         /// Control rate [Hz].
-        #[arg(long, default_value_t = 100.0)]
+        #[arg(long, default_value_t = 1000.0)]
         rate: f64,
         /// Run time [s].
         #[arg(long, default_value_t = 60.0)]
         seconds: f64,
-        /// What to do when the supervisor's heartbeat stops.
-        #[arg(long, value_enum, default_value = "stop")]
-        on_supervisor_loss: Policy,
-        /// Supervisor heartbeat timeout [s].
-        #[arg(long, default_value_t = 0.25)]
-        liveness_timeout: f64,
+        /// Upper-arm length of the simulated person [m].
+        #[arg(long, default_value_t = 0.30)]
+        l1: f64,
+        /// Forearm length of the simulated person [m].
+        #[arg(long, default_value_t = 0.20)]
+        l2: f64,
+        /// Measurement-noise seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Write the session log (plant.md CSV, with the plant's truth) to
+        /// this file.
+        #[arg(long)]
+        log: Option<PathBuf>,
     },
     /// Send one signed command and print its ack.
     Send {
@@ -171,44 +241,32 @@ fn supervisor(peer: &Peer, key: CommandKey) -> Result<Supervisor, CliError> {
 pub fn run(args: ZenohArgs) -> Result<(), CliError> {
     match args.action {
         Action::Node {
-            peer,
-            listen,
-            key_file,
+            link,
             rate,
             seconds,
-            on_supervisor_loss,
-            liveness_timeout,
+            l1,
+            l2,
+            seed,
+            log,
         } => {
             let period = positive_duration(1.0 / rate, "--rate")?;
             let run_time = positive_duration(seconds, "--seconds")?;
-            let settings = LinkSettings {
-                robot_id: peer.robot,
-                format: peer.format.into(),
-                command_key: read_key(&key_file)?,
-                sample_decimation: 1,
-                sample_qos: SampleQos::BATCHED,
-                status_period: 0.1,
-                liveness: LivenessPolicy {
-                    timeout: positive_duration(liveness_timeout, "--liveness-timeout")?,
-                    on_loss: match on_supervisor_loss {
-                        Policy::Stop => OnSupervisorLoss::Stop,
-                        Policy::Continue => OnSupervisorLoss::Continue,
-                    },
-                },
-            };
-            let config = peer_config(&listen, &peer.connect, LEASE_MS).map_err(bad_input)?;
-            let lift = ScriptedLift::reference();
-            let (kernel, origin) = lift.kernel_after_lift();
-            let node = Node::spawn(
-                config,
-                &settings,
-                LoopSettings { period, origin },
-                kernel,
-                Box::new(lift),
-            )
-            .map_err(bad_input)?;
+            let (config, settings) = link.settings()?;
+            let mut params = limb_sim::PlantParameters::new(l1, l2);
+            params.seed = seed;
+            let plant = limb_sim::Plant::new(params).map_err(CliError::BadInput)?;
+            let kernel = Box::new(
+                Kernel::new(KernelConfig::default())
+                    .map_err(|e| CliError::BadInput(format!("kernel configuration: {e}")))?,
+            );
+            let robot = ReferenceRobot::new(plant, rate, f64::INFINITY);
+            let observer = LogFile::create(log.as_deref())?;
+            let node =
+                Node::spawn_observed(config, &settings, Some(period), kernel, robot, observer)
+                    .map_err(bad_input)?;
             std::thread::sleep(run_time);
-            let kernel = node.shutdown().map_err(internal)?;
+            let (kernel, observer) = node.finish().map_err(internal)?;
+            LogFile::finish(observer, log.as_deref())?;
             print_json(&serde_json::json!({ "state": State::from(kernel.state().kind()) }))
         }
         Action::Send {

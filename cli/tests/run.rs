@@ -129,3 +129,11 @@ fn bad_arguments_exit_2() {
         assert!(!err.trim().is_empty());
     }
 }
+
+/// A refused configuration names the field and the problem, not a group.
+#[test]
+fn a_refused_configuration_names_its_field() {
+    let (code, _, err) = limb(&["run", "--max-force", "0"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("limits.max_force: not_positive"), "{err}");
+}

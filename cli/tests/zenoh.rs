@@ -27,7 +27,8 @@ fn a_node_logs_the_commands_it_refuses() {
         ])
         .arg("--key-file")
         .arg(&key)
-        .args(["--seconds", "4"])
+        .args(["--seconds", "4", "--log"])
+        .arg(dir.join("node.csv"))
         .stdout(Stdio::piped())
         .stderr(Stdio::piped());
         match rust_log {
@@ -63,6 +64,14 @@ fn a_node_logs_the_commands_it_refuses() {
             log.contains("command refused") && log.contains("Unauthorised"),
             "RUST_LOG={rust_log:?}: {log}"
         );
+        // The node's session log: the plant.md header, a row per step.
+        let rows = std::fs::read_to_string(dir.join("node.csv")).unwrap();
+        let mut lines = rows.lines();
+        assert!(lines
+            .next()
+            .unwrap()
+            .starts_with("t,xd,zd,psid,x,y,z,psi,fx,fz,ty,q1"));
+        assert!(lines.count() > 100, "{rows}");
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }

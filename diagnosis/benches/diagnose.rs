@@ -1,4 +1,5 @@
-//! Time to diagnose one 29 s arm log across all ten candidates, beside
+//! Time to diagnose one 29 s arm log, lengths not given (fitted with the
+//! effects), across all ten candidates, on one thread and on two, beside
 //! its unit of work — one run of the reference plant over the same log —
 //! measured in the same process.
 //!
@@ -12,7 +13,7 @@
 //! The log: `shared/data/effects/backlash.csv` (2 917 samples, 29.16 s).
 
 use criterion::Criterion;
-use limb_diagnosis::arm::ArmModel;
+use limb_diagnosis::arm::{ArmModel, Lengths};
 use limb_diagnosis::verdict::diagnose;
 use limb_diagnosis::Model;
 use std::hint::black_box;
@@ -30,7 +31,7 @@ fn benches(c: &mut Criterion) {
     group
         .sample_size(10)
         .measurement_time(Duration::from_secs(40));
-    let model = ArmModel::new(0.3, 0.2, &records).expect("model");
+    let model = ArmModel::new(Lengths::Given(0.3, 0.2), &records).expect("model");
     let mass = model
         .candidates()
         .iter()
@@ -46,9 +47,13 @@ fn benches(c: &mut Criterion) {
                 .expect("sim")
         })
     });
+    // One thread is the work itself; two, the machine's two cores, are
+    // what `limb diagnose` uses here.
     for threads in [1, 2] {
         group.bench_function(format!("all_candidates_{threads}_threads"), |b| {
-            b.iter(|| diagnose(0.3, 0.2, black_box(&records), threads, &|_| {}).expect("diagnosis"))
+            b.iter(|| {
+                diagnose(Lengths::Fitted, black_box(&records), threads, &|_| {}).expect("diagnosis")
+            })
         });
     }
     group.finish();
@@ -75,18 +80,23 @@ fn write_figures() {
         eprintln!("criterion estimates missing: benchmarks/diagnose.md not written");
         return;
     };
+    let load = std::fs::read_to_string("/proc/loadavg")
+        .ok()
+        .and_then(|l| l.split_whitespace().next().map(str::to_owned))
+        .unwrap_or_else(|| "unknown".into());
     let report = format!(
         "# Diagnosis benchmark\n\n`cargo bench -p limb-diagnosis --bench diagnose` on this machine \
-         (criterion medians, 10 samples each, all three in one process). The log: \
-         `shared/data/effects/backlash.csv` (2 917 samples, 29.16 s), all ten candidates.\n\n\
-         | measured | median |\n|---|---|\n\
-         | one run of the reference plant over the log (the unit of work) | {:.2} ms |\n\
-         | diagnosis, all candidates, 1 thread | {one:.2} s |\n\
-         | diagnosis, all candidates, 2 threads | {two:.2} s |\n\n\
-         Ratios: 1 thread = {:.0} plant runs; 2 threads are {:.2}× faster than 1.\n",
+         (criterion medians, 10 samples each, all three in one process; load average {load} \
+         on 2 cores when the bench finished). The log: \
+         `shared/data/effects/backlash.csv` (2 917 samples, 29.16 s), lengths not given (fitted), \
+         all ten candidates.\n\n\
+         | measured | median | plant runs |\n|---|---|---|\n\
+         | one run of the reference plant over the log (the unit of work) | {:.2} ms | 1 |\n\
+         | diagnosis, all candidates, 1 thread | {one:.2} s | {:.0} |\n\
+         | diagnosis, all candidates, 2 threads | {two:.2} s | {:.0} |\n",
         plant * 1e3,
         one / plant,
-        one / two
+        two / plant
     );
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../benchmarks/diagnose.md");
     if let Err(error) = std::fs::write(path, report) {

@@ -88,7 +88,7 @@ impl<'a> Problem<'a> {
 }
 
 /// How the engine works.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Options {
     /// Minimisation budget per fit.
     pub budget: Budget,
@@ -96,6 +96,18 @@ pub struct Options {
     pub threads: usize,
     /// Most effects forward selection adds.
     pub max_effects: usize,
+    /// Least an addition must lower the held-out gap by (the model's
+    /// metric), besides earning its parameters: on a long log the
+    /// criterion detects differences far below any effect worth naming
+    /// (a plant that differs from the sim in small ways, a factor of
+    /// 1.0002), and those must not be named. 0 (the default): only the
+    /// criterion decides.
+    pub min_gain: f64,
+    /// Least share of the current held-out gap an addition must remove:
+    /// an effect outside the candidates leaves a large gap that each
+    /// candidate trims by a few per cent, and none may claim it. 0 (the
+    /// default): only the criterion decides.
+    pub min_share: f64,
 }
 
 impl Default for Options {
@@ -104,6 +116,8 @@ impl Default for Options {
             budget: Budget::default(),
             threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
             max_effects: 1,
+            min_gain: 0.0,
+            min_share: 0.0,
         }
     }
 }
@@ -187,6 +201,9 @@ pub struct Selection {
     pub steps: Vec<Step>,
     /// The nominal sim's own fitted parameters (see [`Model::base`]).
     pub nominal: BTreeMap<String, f64>,
+    /// The same parameters refitted with the chosen effects (equal to
+    /// `nominal` when none was chosen).
+    pub corrected: BTreeMap<String, f64>,
     /// Where the nominal sim's gap lies (held-out side, all its samples).
     pub location: Location,
     /// Where what the chosen effects leave lies.
@@ -284,16 +301,10 @@ fn effects_at(model: &dyn Model, layout: &[usize], units: &[f64]) -> Vec<Applied
         .collect()
 }
 
-fn fit(
-    problem: &Problem,
-    base: &[Applied],
-    candidate: usize,
-    hints: &Hints,
-    options: &Options,
-) -> Fitted {
-    let model = problem.fit.model;
+/// Unit coordinates of `effects`' values, in order.
+fn units_of(model: &dyn Model, effects: &[Applied]) -> Vec<f64> {
     let candidates = model.candidates();
-    let base_units: Vec<f64> = base
+    effects
         .iter()
         .flat_map(|a| {
             candidates[a.candidate]
@@ -302,7 +313,41 @@ fn fit(
                 .zip(&a.values)
                 .map(|(p, v)| p.unit_of(*v))
         })
-        .collect();
+        .collect()
+}
+
+/// Minimises the fit samples' cost over the parameters of the effects
+/// `layout` from `starts` (unit coordinates); every point is refined by
+/// the model's own solve, where it has one. Returns the effects at the
+/// minimum and the evaluations spent.
+fn minimize_over(
+    problem: &Problem,
+    layout: &[usize],
+    starts: &[Vec<f64>],
+    options: &Options,
+) -> (Vec<Applied>, usize) {
+    let model = problem.fit.model;
+    let effects_for = |units: &[f64]| {
+        let effects = effects_at(model, layout, units);
+        model.polish(&effects, &problem.fit.mask).unwrap_or(effects)
+    };
+    let cost = |units: &[f64]| match model.predict(&effects_for(units)) {
+        Ok(predicted) => sum_of_squares(model, &predicted, &problem.fit.mask).0,
+        Err(_) => f64::INFINITY,
+    };
+    let minimum = minimize(cost, starts, options.budget);
+    (effects_for(&minimum.point), minimum.evaluations)
+}
+
+fn fit(
+    problem: &Problem,
+    base: &[Applied],
+    candidate: usize,
+    hints: &Hints,
+    options: &Options,
+) -> Fitted {
+    let model = problem.fit.model;
+    let base_units = units_of(model, base);
     let layout: Vec<usize> = base
         .iter()
         .map(|a| a.candidate)
@@ -313,23 +358,13 @@ fn fit(
         .into_iter()
         .map(|s| base_units.iter().copied().chain(s).collect())
         .collect();
-    // Every point is refined by the model's own solve, where it has one.
-    let effects_for = |units: &[f64]| {
-        let effects = effects_at(model, &layout, units);
-        model.polish(&effects, &problem.fit.mask).unwrap_or(effects)
-    };
-    let cost = |units: &[f64]| match model.predict(&effects_for(units)) {
-        Ok(predicted) => sum_of_squares(model, &predicted, &problem.fit.mask).0,
-        Err(_) => f64::INFINITY,
-    };
-    let minimum = minimize(cost, &starts, options.budget);
-    let effects = effects_for(&minimum.point);
+    let (effects, evaluations) = minimize_over(problem, &layout, &starts, options);
     let signals = problem.held.model.signals().len();
     let held = held_sums(problem, &effects).unwrap_or_else(|_| vec![(f64::INFINITY, 0); signals]);
     Fitted {
         effects,
         held,
-        evaluations: minimum.evaluations + 1,
+        evaluations: evaluations + 1,
     }
 }
 
@@ -342,8 +377,58 @@ fn held_sums(problem: &Problem, effects: &[Applied]) -> Result<Vec<(f64, usize)>
     ))
 }
 
+/// Gauss–Newton iterations that settle a linearised base (see
+/// [`Model::recentre`]) after each selection step.
+const SETTLE_ITERATIONS: usize = 4;
+
+/// Moves a linearised model's reference to the base values of `chosen`
+/// and re-solves them there, until they stop moving (Gauss–Newton on the
+/// base with the effects held): the chosen set's predictions are then
+/// exact at its reported values. Models without a linearisation return
+/// `chosen` untouched.
+fn settle(problem: &Problem, mut chosen: Vec<Applied>) -> Vec<Applied> {
+    let recentre = |effects: &[Applied]| {
+        let moved = problem.fit.model.recentre(effects);
+        let same = std::ptr::addr_eq(problem.fit.model, problem.held.model);
+        (same || problem.held.model.recentre(effects)) && moved
+    };
+    for _ in 0..SETTLE_ITERATIONS {
+        if !recentre(&chosen) {
+            return chosen;
+        }
+        match problem.fit.model.polish(&chosen, &problem.fit.mask) {
+            Some(polished) if polished != chosen => chosen = polished,
+            _ => return chosen,
+        }
+    }
+    recentre(&chosen);
+    chosen
+}
+
+/// Refits every parameter of `chosen` jointly from its current values
+/// (one start, the full budget) and settles the base again: on a
+/// linearised model the added effect was fitted around the reference of
+/// before, and what that leaves must not be credited to the next
+/// addition. Returns the set and the evaluations spent.
+fn refit(problem: &Problem, chosen: Vec<Applied>, options: &Options) -> (Vec<Applied>, usize) {
+    let layout: Vec<usize> = chosen.iter().map(|a| a.candidate).collect();
+    let start = units_of(problem.fit.model, &chosen);
+    let (effects, evaluations) = minimize_over(problem, &layout, &[start], options);
+    (settle(problem, effects), evaluations)
+}
+
+/// Most refit rounds after an addition.
+const REFITS: usize = 3;
+/// A base that moves less than this in unit coordinates in a refit
+/// round has settled.
+const BASE_STILL: f64 = 1e-4;
+
 /// `f(0..count)` on `threads` workers; results in index order.
-fn parallel_map<T: Send>(count: usize, threads: usize, f: impl Fn(usize) -> T + Sync) -> Vec<T> {
+pub(crate) fn parallel_map<T: Send>(
+    count: usize,
+    threads: usize,
+    f: impl Fn(usize) -> T + Sync,
+) -> Vec<T> {
     let next = AtomicUsize::new(0);
     let results: Mutex<Vec<Option<T>>> = Mutex::new((0..count).map(|_| None).collect());
     std::thread::scope(|scope| {
@@ -400,9 +485,13 @@ pub fn select(
     if let Some(base) = problem.fit.model.base() {
         let fitted = fit(problem, &[], base, &Hints::default(), options);
         evaluations += fitted.evaluations;
-        chosen = fitted.effects;
+        chosen = settle(problem, fitted.effects);
     }
     let nominal_effects = chosen.clone();
+    let base_count: usize = nominal_effects
+        .iter()
+        .map(|a| candidates[a.candidate].parameters.len())
+        .sum();
     let nominal = held.predict(&chosen).map_err(EngineError::Nominal)?;
     let nominal_sums = signal_sums(held, &nominal, &problem.held.mask);
     let (nominal_sum, terms) = (
@@ -425,7 +514,11 @@ pub fn select(
         let remaining: Vec<usize> = (0..candidates.len())
             .filter(|c| chosen.iter().all(|a| a.candidate != *c))
             .collect();
-        if remaining.is_empty() {
+        // No addition can gain more than the whole gap left: once that is
+        // below the least gain, later steps cannot add anything (the
+        // first step is always run, for its ranking).
+        let hopeless = !steps.is_empty() && gap_of(total(&current)) < options.min_gain;
+        if remaining.is_empty() || hopeless {
             break;
         }
         let done = AtomicUsize::new(0);
@@ -469,17 +562,44 @@ pub fn select(
             })
             .collect();
         ranked.sort_by(|a, b| b.0.criterion.total_cmp(&a.0.criterion));
+        let gap_now = gap_of(total(&current));
         let winner = ranked
             .first()
-            .filter(|(r, _)| r.criterion > 0.0)
+            .filter(|(r, _)| {
+                let gain = gap_now - r.held_out_after;
+                r.criterion > 0.0 && gain >= options.min_gain && gain >= options.min_share * gap_now
+            })
             .map(|(r, f)| (r.effect.clone(), (*f).clone()));
         steps.push(Step {
             ranking: ranked.iter().map(|(r, _)| r.clone()).collect(),
             added: winner.as_ref().map(|w| w.0.clone()),
         });
         let Some((_, fitted)) = winner else { break };
-        chosen = fitted.effects;
-        current = fitted.held;
+        let settled = settle(problem, fitted.effects.clone());
+        if settled == fitted.effects {
+            chosen = settled;
+            current = fitted.held;
+        } else {
+            // Refit and settle until the base stops moving: a base far from
+            // the reference of the step's fits (an arm fitted to the
+            // arm after a slip) needs more than one round.
+            let mut set = settled;
+            for _ in 0..REFITS {
+                let (refitted, spent) = refit(problem, set.clone(), options);
+                evaluations += spent;
+                let moved = units_of(held, &refitted)
+                    .iter()
+                    .zip(units_of(held, &set))
+                    .take(base_count)
+                    .any(|(a, b)| (a - b).abs() > BASE_STILL);
+                set = refitted;
+                if !moved {
+                    break;
+                }
+            }
+            current = held_sums(problem, &set).unwrap_or(fitted.held);
+            chosen = set;
+        }
     }
     let chosen_prediction = if chosen == nominal_effects {
         nominal.clone()
@@ -516,20 +636,24 @@ pub fn select(
             ranked
         })
         .collect();
-    let nominal_parameters = nominal_effects
-        .first()
-        .map(|a| {
-            candidates[a.candidate]
-                .parameters
-                .iter()
-                .zip(&a.values)
-                .map(|(p, v)| (p.name.to_string(), *v))
-                .collect()
-        })
-        .unwrap_or_default();
+    let parameters_of = |effects: &[Applied]| {
+        effects
+            .first()
+            .filter(|_| base > 0)
+            .map(|a| {
+                candidates[a.candidate]
+                    .parameters
+                    .iter()
+                    .zip(&a.values)
+                    .map(|(p, v)| (p.name.to_string(), *v))
+                    .collect()
+            })
+            .unwrap_or_default()
+    };
     Ok(Selection {
         effects,
-        nominal: nominal_parameters,
+        nominal: parameters_of(&nominal_effects),
+        corrected: parameters_of(&chosen),
         steps,
         location,
         remaining,

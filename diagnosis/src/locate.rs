@@ -127,6 +127,7 @@ pub fn locate(model: &dyn Model, residual: &Series) -> (Location, Hints) {
         location.t_start = Some(times[first]);
         location.t_end = Some(times[last]);
         hints.onset = Some(times[first]);
+        hints.end = Some(times[last]);
     }
     let spectra: Vec<Spectrum> = named
         .iter()

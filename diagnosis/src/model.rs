@@ -202,6 +202,8 @@ pub enum ModelError {
 pub struct Hints {
     /// First time the residual leaves the noise [s], when it does.
     pub onset: Option<f64>,
+    /// Last time it is beyond the noise [s], when it is.
+    pub end: Option<f64>,
     /// Frequency of the residual's spectral peak [Hz], when one stands out.
     pub frequency: Option<f64>,
     /// The band around that peak holding its power [Hz], when the
@@ -281,6 +283,15 @@ pub trait Model: Sync {
     /// parameters' ranges.
     fn polish(&self, _effects: &[Applied], _mask: &[bool]) -> Option<Vec<Applied>> {
         None
+    }
+    /// For a model whose prediction is linearised in its base parameters
+    /// around a reference (so [`Model::polish`] solves them by least
+    /// squares): moves the reference to the base values in `effects` and
+    /// returns `true`. The default (no linearisation) does nothing and
+    /// returns `false`. The engine calls it between selection steps only,
+    /// never while candidates are fitted side by side.
+    fn recentre(&self, _effects: &[Applied]) -> bool {
+        false
     }
     /// Start points for fitting `candidate`, in unit coordinates (one per
     /// parameter, each in [0, 1]). The default is an even grid.

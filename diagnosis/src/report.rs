@@ -203,6 +203,10 @@ pub struct Subject<'a> {
     pub source: &'a str,
     /// How the data were held out, in words.
     pub held_out: &'a str,
+    /// The plant's own findings, shown as a table under the gap (label,
+    /// text): the arm's corrected lengths beside the kernel's estimate
+    /// and the unexplained part; empty for none.
+    pub facts: &'a [(String, String)],
 }
 
 /// The report page of one diagnosis (any plant: the arm, a drive).
@@ -212,6 +216,7 @@ pub fn page(subject: &Subject) -> String {
         selection,
         source,
         held_out,
+        facts,
     } = *subject;
     let predictions = &selection.predictions;
     let empty = Series::with_capacity(model.signals().len(), 0);
@@ -266,7 +271,20 @@ pub fn page(subject: &Subject) -> String {
         if shade.is_some() { " (shaded)" } else { "" },
         place(&selection.remaining)
     );
-    html += ".</p><h2>Sim against real</h2>";
+    html += ".</p>";
+    if !facts.is_empty() {
+        html += "<table>";
+        for (label, text) in facts {
+            let _ = write!(
+                html,
+                "<tr><td>{}</td><td>{}</td></tr>",
+                escape(label),
+                escape(text)
+            );
+        }
+        html += "</table>";
+    }
+    html += "<h2>Sim against real</h2>";
     // A legend entry has about 150 px.
     let with = if effects.len() <= 20 {
         format!("sim + {effects}")

@@ -1,16 +1,19 @@
-//! The blind self-check: logs with a withheld effect, diagnosed by a
-//! diagnoser that is told only the arm lengths.
+//! The blind self-check: logs with withheld effects, diagnosed by a
+//! diagnoser that is told nothing of the arm (lengths fitted).
 //!
-//! Each log draws, from one seeded stream: a class uniformly among the
-//! ten effects of `plant.md` and `none`; one of the six benchmark arms;
-//! the effect's parameters from [`RANGES`]; and the noise seed. The
-//! reference plant (`limb-sim`, noise on) writes the log, ground truth
-//! is dropped, and [`crate::verdict::diagnose`] answers. The check counts
-//! the confusion matrix, top-1 accuracy, the held-out shrink of correct
-//! answers, the relative error of their fitted parameters, and `none`
-//! answers given for logs whose effect is larger than twice the noise
-//! floor (effect size: the largest over signals of the RMS of
-//! (sim with effect − nominal sim) / σ, both noise-free).
+//! Each log draws, from one seeded stream: in three logs of four a class
+//! uniformly among the ten effects of `plant.md` and `none`, in the
+//! fourth a pair of distinct effects; a random arm (l1 uniform in
+//! [`UPPER_ARMS`], l2 in [`FOREARMS`]); the effects' parameters from
+//! [`RANGES`]; and the noise seed. The reference plant (`limb-sim`, noise
+//! on) writes the log, ground truth is dropped, and
+//! [`crate::verdict::diagnose`] answers without the lengths. The check
+//! counts, over the single-effect and clean logs, the confusion matrix of
+//! the first effect added, top-1 accuracy, clean logs accused, `none`
+//! answers for effects larger than twice the noise floor (effect size:
+//! the largest over signals of the RMS of (sim with effect − nominal
+//! sim) / σ, both noise-free, with the true arm), the corrected arm's
+//! error; over the pairs, how often both effects are among those added.
 //!
 //! # Parameter ranges
 //! [`RANGES`] spans roughly a quarter to four times the magnitude of the
@@ -18,14 +21,23 @@
 //! valid range; signed effects take either sign. Sampling is uniform in
 //! the logarithm where the range spans a decade or more.
 
-use crate::arm::ArmModel;
-use crate::engine::Progress;
+use crate::arm::{ArmModel, Lengths};
+use crate::engine::{parallel_map, Progress};
 use crate::model::{Applied, Model};
 use crate::verdict::{diagnose, DiagnoseError};
 use limb_sim::effects::{Effect, Effects, CATALOGUE};
 use limb_sim::log::Record;
 use limb_sim::noise::Gaussian;
-use limb_sim::{scripted, Plant, PlantParameters, BENCHMARK_ARMS};
+use limb_sim::{scripted, Plant, PlantParameters};
+
+/// Range the upper-arm length is drawn from [m].
+pub const UPPER_ARMS: [f64; 2] = [0.24, 0.36];
+/// Range the forearm length is drawn from [m].
+pub const FOREARMS: [f64; 2] = [0.16, 0.24];
+/// Every this many logs, one carries a pair of effects.
+const PAIR_EVERY: usize = 4;
+/// Corrected arm error counted as right [m].
+pub const ARM_TOLERANCE: f64 = 0.003;
 use serde::Serialize;
 
 /// How one parameter is drawn: (name, low, high, logarithmic, either sign).
@@ -71,22 +83,39 @@ pub fn classes() -> Vec<&'static str> {
 pub struct Case {
     /// Index in the run.
     pub index: usize,
-    /// The withheld effect (or `none`).
-    pub truth: String,
-    /// Its parameters.
-    pub params: Vec<(String, f64)>,
+    /// The withheld effects (empty: a clean log).
+    pub truth: Vec<String>,
+    /// Their parameters.
+    pub params: Vec<Vec<(String, f64)>>,
     /// Arm lengths [m].
     pub arm: (f64, f64),
     /// Noise seed.
     pub seed: u64,
-    /// Effect size: largest per-signal RMS of its noise-free effect [σ].
+    /// Effect size of the smallest withheld effect [σ] (0 for none).
     pub size: f64,
-    /// The diagnoser's answer.
+    /// The first effect added, or `none`.
     pub answer: String,
+    /// Every effect added, in order.
+    pub added: Vec<String>,
     /// Held-out shrink of the answer.
     pub shrink: f64,
-    /// Fitted parameters when the answer is right, relative error each.
+    /// Largest error of the corrected arm's lengths [m].
+    pub arm_error: f64,
+    /// Fitted parameters when a single effect is answered right, relative
+    /// error each.
     pub parameter_errors: Vec<f64>,
+}
+
+impl Case {
+    /// The class of a single-effect or clean log (`none`), `None` for a
+    /// pair.
+    pub fn class(&self) -> Option<&str> {
+        match self.truth.as_slice() {
+            [] => Some("none"),
+            [one] => Some(one),
+            _ => None,
+        }
+    }
 }
 
 /// The check's result.
@@ -98,19 +127,34 @@ pub struct Summary {
     pub seed: u64,
     /// Class names, the row and column order of `confusion`.
     pub classes: Vec<String>,
-    /// confusion[truth][answer] counts.
+    /// confusion[truth][answer] counts over single-effect and clean logs.
     pub confusion: Vec<Vec<usize>>,
-    /// Share of logs whose answer is the withheld class.
+    /// Single-effect and clean logs.
+    pub singles: usize,
+    /// Share of them whose answer is the withheld class.
     pub top1_accuracy: f64,
     /// Median held-out shrink over correct answers with an effect.
     pub median_shrink: f64,
     /// Median relative parameter error over correct answers with an
     /// effect (every parameter).
     pub median_parameter_error: f64,
-    /// `none` answered for a log whose effect exceeds twice the noise.
+    /// `none` answered for a single-effect log whose effect exceeds twice
+    /// the noise.
     pub none_for_large_effects: usize,
-    /// Logs whose effect is larger than twice the noise floor.
+    /// Single-effect logs whose effect is larger than twice the noise floor.
     pub large_effects: usize,
+    /// Clean logs.
+    pub clean: usize,
+    /// Clean logs given an effect.
+    pub clean_accused: usize,
+    /// Single-effect logs.
+    pub single_effects: usize,
+    /// Of them, those whose corrected arm is within [`ARM_TOLERANCE`].
+    pub arm_within_tolerance: usize,
+    /// Logs with a pair of effects.
+    pub pairs: usize,
+    /// Of them, those with both effects among those added.
+    pub pairs_both_named: usize,
     /// Every log.
     pub cases: Vec<Case>,
 }
@@ -135,19 +179,14 @@ fn pick(random: &mut Gaussian, count: usize) -> usize {
 }
 
 /// The log of one case: the reference plant with arm lengths `l1`, `l2`
-/// [m], noise seed `seed` and `effect`, noise on, ground truth dropped.
+/// [m], noise seed `seed` and `effects`, noise on, ground truth dropped.
 ///
 /// # Errors
-/// The plant's refusal of the arm or the effect, in words.
-pub fn simulate(
-    l1: f64,
-    l2: f64,
-    seed: u64,
-    effect: Option<Effect>,
-) -> Result<Vec<Record>, String> {
+/// The plant's refusal of the arm or the effects, in words.
+pub fn simulate(l1: f64, l2: f64, seed: u64, effects: &[Effect]) -> Result<Vec<Record>, String> {
     let mut params = PlantParameters::new(l1, l2);
     params.seed = seed;
-    let effects = Effects::new(effect.as_slice()).map_err(|e| e.to_string())?;
+    let effects = Effects::new(effects).map_err(|e| e.to_string())?;
     let mut plant = Plant::with_effects(params, effects)?;
     let rows = scripted::estimation_run(&mut plant)?;
     Ok(rows
@@ -186,65 +225,126 @@ fn effect_size(model: &ArmModel, applied: &[Applied]) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// One case: draw, simulate, diagnose.
-fn case(index: usize, random: &mut Gaussian, threads: usize) -> Result<Case, DiagnoseError> {
+/// One effect of class `class` with parameters drawn from [`RANGES`].
+fn draw_effect(
+    random: &mut Gaussian,
+    class: usize,
+) -> Result<(Effect, Vec<(String, f64)>), DiagnoseError> {
     let names = classes();
-    let class = pick(random, names.len());
-    let (l1, l2) = BENCHMARK_ARMS[pick(random, BENCHMARK_ARMS.len())];
-    let seed = (random.uniform() * 1e15) as u64;
-    let (effect, params) = match RANGES.get(class) {
-        Some(ranges) => {
-            let params: Vec<(String, f64)> = ranges
-                .iter()
-                .map(|r| (r.0.to_string(), draw(random, r)))
-                .collect();
-            let pairs: Vec<(&str, f64)> = params.iter().map(|(k, v)| (k.as_str(), *v)).collect();
-            let effect = Effect::new(names[class], &pairs)
-                .map_err(|e| DiagnoseError::SelfCheck(e.to_string()))?;
-            (Some(effect), params)
-        }
-        None => (None, Vec::new()),
-    };
-    let records = simulate(l1, l2, seed, effect).map_err(DiagnoseError::SelfCheck)?;
-    let diagnosed = diagnose(l1, l2, &records, threads, &|_: Progress| {})?;
-    let applied: Vec<Applied> = effect
+    let ranges = RANGES
+        .get(class)
+        .ok_or_else(|| DiagnoseError::SelfCheck(format!("no class {class}")))?;
+    let params: Vec<(String, f64)> = ranges
         .iter()
-        .map(|e| Applied {
-            candidate: class,
-            values: e.values(),
-        })
+        .map(|r| (r.0.to_string(), draw(random, r)))
         .collect();
-    let size = effect_size(&diagnosed.model, &applied);
-    let d = &diagnosed.diagnosis;
-    let right = d.effect == names[class] && effect.is_some();
-    let parameter_errors = if right {
-        d.ranking
-            .first()
-            .map(|r| {
-                params
-                    .iter()
-                    .filter_map(|(k, v)| r.params.get(k).map(|f| ((f - v) / v).abs()))
-                    .collect()
-            })
-            .unwrap_or_default()
+    let pairs: Vec<(&str, f64)> = params.iter().map(|(k, v)| (k.as_str(), *v)).collect();
+    let effect =
+        Effect::new(names[class], &pairs).map_err(|e| DiagnoseError::SelfCheck(e.to_string()))?;
+    Ok((effect, params))
+}
+
+/// One log's draw: the withheld classes, their parameters, the arm and
+/// the noise seed.
+struct Drawn {
+    index: usize,
+    classes: Vec<usize>,
+    effects: Vec<Effect>,
+    params: Vec<Vec<(String, f64)>>,
+    arm: (f64, f64),
+    seed: u64,
+}
+
+/// Draws log `index` from `random` (every draw of a log comes before the
+/// next log's, so a run's logs do not depend on how they are diagnosed).
+fn draw_case(index: usize, random: &mut Gaussian) -> Result<Drawn, DiagnoseError> {
+    let names = classes();
+    let effects_count = RANGES.len();
+    let classes: Vec<usize> = if index % PAIR_EVERY == PAIR_EVERY - 1 {
+        let first = pick(random, effects_count);
+        let mut second = pick(random, effects_count - 1);
+        if second >= first {
+            second += 1;
+        }
+        vec![first, second]
     } else {
-        Vec::new()
+        let class = pick(random, names.len());
+        (class < effects_count)
+            .then_some(class)
+            .into_iter()
+            .collect()
     };
-    Ok(Case {
+    let l1 = UPPER_ARMS[0] + random.uniform() * (UPPER_ARMS[1] - UPPER_ARMS[0]);
+    let l2 = FOREARMS[0] + random.uniform() * (FOREARMS[1] - FOREARMS[0]);
+    let seed = (random.uniform() * 1e15) as u64;
+    let mut effects = Vec::new();
+    let mut params = Vec::new();
+    for class in &classes {
+        let (effect, p) = draw_effect(random, *class)?;
+        effects.push(effect);
+        params.push(p);
+    }
+    Ok(Drawn {
         index,
-        truth: names[class].to_string(),
+        classes,
+        effects,
         params,
         arm: (l1, l2),
         seed,
-        size,
+    })
+}
+
+/// One case: simulate the drawn log, diagnose it without the lengths
+/// (one thread).
+fn case(drawn: &Drawn) -> Result<Case, DiagnoseError> {
+    let names = classes();
+    let ((l1, l2), seed) = (drawn.arm, drawn.seed);
+    let (classes, effects) = (&drawn.classes, &drawn.effects);
+    let records = simulate(l1, l2, seed, effects).map_err(DiagnoseError::SelfCheck)?;
+    let diagnosed = diagnose(Lengths::Fitted, &records, 1, &|_: Progress| {})?;
+    let truth_model = ArmModel::new(Lengths::Given(l1, l2), &records)?;
+    let size = classes
+        .iter()
+        .zip(effects)
+        .map(|(class, e)| {
+            effect_size(
+                &truth_model,
+                &[Applied {
+                    candidate: *class,
+                    values: e.values(),
+                }],
+            )
+        })
+        .fold(f64::INFINITY, f64::min);
+    let d = &diagnosed.diagnosis;
+    let truth: Vec<String> = classes.iter().map(|c| names[*c].to_string()).collect();
+    let parameter_errors = match (truth.as_slice(), d.effects.first(), drawn.params.first()) {
+        ([one], Some(first), Some(p)) if *one == first.effect => p
+            .iter()
+            .filter_map(|(k, v)| first.params.get(k).map(|f| ((f - v) / v).abs()))
+            .collect(),
+        _ => Vec::new(),
+    };
+    Ok(Case {
+        index: drawn.index,
+        truth,
+        params: drawn.params.clone(),
+        arm: (l1, l2),
+        seed,
+        size: if size.is_finite() { size } else { 0.0 },
         answer: d.effect.clone(),
+        added: d.effects.iter().map(|e| e.effect.clone()).collect(),
         shrink: d.gap.shrink,
+        arm_error: (d.arm.l1 - l1).abs().max((d.arm.l2 - l2).abs()),
         parameter_errors,
     })
 }
 
-/// Runs the check over `logs` logs drawn from `seed`; `progress` is told
-/// of every finished case.
+/// Runs the check over `logs` logs drawn from `seed`, diagnosing
+/// `threads` logs side by side (each on one thread: the candidates of one
+/// diagnosis differ in cost by a factor of ten, whole logs balance
+/// better); `progress` is told of every finished case, in the order they
+/// finish. The figures do not depend on `threads`.
 ///
 /// # Errors
 /// A case whose simulation or diagnosis failed (a defect, not a miss).
@@ -252,16 +352,20 @@ pub fn run(
     logs: usize,
     seed: u64,
     threads: usize,
-    progress: &dyn Fn(&Case),
+    progress: &(dyn Fn(&Case) + Sync),
 ) -> Result<Summary, DiagnoseError> {
     let names = classes();
     let mut random = Gaussian::new(seed);
-    let mut cases = Vec::with_capacity(logs);
-    for index in 0..logs {
-        let c = case(index, &mut random, threads)?;
+    let drawn = (0..logs)
+        .map(|index| draw_case(index, &mut random))
+        .collect::<Result<Vec<_>, _>>()?;
+    let cases = parallel_map(logs, threads, |index| {
+        let c = case(&drawn[index])?;
         progress(&c);
-        cases.push(c);
-    }
+        Ok(c)
+    })
+    .into_iter()
+    .collect::<Result<Vec<Case>, DiagnoseError>>()?;
     let position = |name: &str| {
         names
             .iter()
@@ -269,34 +373,50 @@ pub fn run(
             .unwrap_or(names.len() - 1)
     };
     let mut confusion = vec![vec![0usize; names.len()]; names.len()];
-    for c in &cases {
-        confusion[position(&c.truth)][position(&c.answer)] += 1;
+    let singles: Vec<&Case> = cases.iter().filter(|c| c.class().is_some()).collect();
+    for c in &singles {
+        confusion[position(c.class().unwrap_or("none"))][position(&c.answer)] += 1;
     }
-    let correct = cases.iter().filter(|c| c.truth == c.answer).count();
+    let correct = singles
+        .iter()
+        .filter(|c| c.class() == Some(&c.answer))
+        .count();
     let right_effects = || {
-        cases
+        singles
             .iter()
-            .filter(|c| c.truth == c.answer && c.truth != "none")
+            .filter(|c| c.class() == Some(&c.answer) && c.answer != "none")
     };
-    let large = |c: &&Case| c.truth != "none" && c.size > 2.0;
+    let single_effects: Vec<&&Case> = singles.iter().filter(|c| c.truth.len() == 1).collect();
+    let large: Vec<&&&Case> = single_effects.iter().filter(|c| c.size > 2.0).collect();
+    let clean: Vec<&&Case> = singles.iter().filter(|c| c.truth.is_empty()).collect();
+    let pairs: Vec<&Case> = cases.iter().filter(|c| c.truth.len() == 2).collect();
     Ok(Summary {
         logs,
         seed,
         classes: names.iter().map(|n| n.to_string()).collect(),
         confusion,
-        top1_accuracy: correct as f64 / logs.max(1) as f64,
+        singles: singles.len(),
+        top1_accuracy: correct as f64 / singles.len().max(1) as f64,
         median_shrink: median(right_effects().map(|c| c.shrink).collect()),
         median_parameter_error: median(
             right_effects()
                 .flat_map(|c| c.parameter_errors.iter().copied())
                 .collect(),
         ),
-        none_for_large_effects: cases
+        none_for_large_effects: large.iter().filter(|c| c.answer == "none").count(),
+        large_effects: large.len(),
+        clean: clean.len(),
+        clean_accused: clean.iter().filter(|c| c.answer != "none").count(),
+        single_effects: single_effects.len(),
+        arm_within_tolerance: single_effects
             .iter()
-            .filter(large)
-            .filter(|c| c.answer == "none")
+            .filter(|c| c.arm_error < ARM_TOLERANCE)
             .count(),
-        large_effects: cases.iter().filter(large).count(),
+        pairs: pairs.len(),
+        pairs_both_named: pairs
+            .iter()
+            .filter(|c| c.truth.iter().all(|t| c.added.contains(t)))
+            .count(),
         cases,
     })
 }

@@ -5,14 +5,17 @@
 //! seed 7, whose peaks sit 14 % and 3.8 % off; a comb of ±2 % around the
 //! peak fitted them to 9 % and 46 % shrink.
 
+use limb_diagnosis::arm::Lengths;
 use limb_diagnosis::selfcheck::simulate;
 use limb_diagnosis::verdict::diagnose;
 use limb_sim::effects::Effect;
 
 fn fitted(l1: f64, l2: f64, seed: u64, amp: f64, freq: f64) -> (String, f64, f64, f64) {
     let effect = Effect::new("active_torque", &[("amp", amp), ("freq", freq)]).unwrap();
-    let records = simulate(l1, l2, seed, Some(effect)).unwrap();
-    let d = diagnose(l1, l2, &records, 2, &|_| {}).unwrap().diagnosis;
+    let records = simulate(l1, l2, seed, &[effect]).unwrap();
+    let d = diagnose(Lengths::Given(l1, l2), &records, 2, &|_| {})
+        .unwrap()
+        .diagnosis;
     let best = &d.ranking[0];
     (
         d.effect.clone(),

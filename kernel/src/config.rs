@@ -7,6 +7,12 @@
 //! positive, every interval non-empty, the planned speeds within the speed
 //! limit.
 
+mod error;
+
+pub(crate) use error::all_positive;
+use error::{finite, non_negative, positive};
+pub use error::{ConfigError, ConfigField, ConfigProblem};
+
 use crate::lift::LiftShaping;
 use crate::motion::EstimationMotionParameters;
 use crate::validate::ValidationLimits;
@@ -32,8 +38,16 @@ impl Interval {
         self.low <= value && value <= self.high
     }
 
-    fn is_valid(&self) -> bool {
-        self.low.is_finite() && self.high.is_finite() && self.low <= self.high
+    /// `Ok` when both bounds are finite and `low <= high`; else the
+    /// problem, named as `field`.
+    fn check(&self, field: ConfigField) -> Result<(), ConfigError> {
+        finite(field, self.low)?;
+        finite(field, self.high)?;
+        if self.low <= self.high {
+            Ok(())
+        } else {
+            Err(ConfigError::new(field, ConfigProblem::EmptyInterval))
+        }
     }
 }
 
@@ -130,6 +144,96 @@ impl Default for SafetyLimits {
     }
 }
 
+impl SafetyLimits {
+    /// The widest limits any configuration may set, whoever signs it
+    /// (REQ-CFG-001): a limit update can tighten a monitor or loosen it up
+    /// to here, never switch it off by a huge value. Design values for a
+    /// robot moving a passive adult arm:
+    /// - `max_force` 140 N: the lowest quasi-static contact force ISO/TS
+    ///   15066 (Table A.2) permits on the hand and forearm regions;
+    /// - `max_torque` 20 N m about the wrist, 2.5 × the default;
+    /// - `max_force_rate` 2 000 N/s, 8 × the default;
+    /// - `max_speed` 0.25 m/s, the reduced speed of ISO 10218-1;
+    /// - `rate_window` 0.5 s, `max_model_mismatch` 0.10 m,
+    ///   `table_tolerance` 0.02 m, `max_sensor_age` 0.1 s (100 periods of
+    ///   the 1 kHz loop);
+    /// - joint ranges within shoulder elevation [−0.5, 2.8] rad (−29°,
+    ///   160°) and elbow flexion [−0.6, 2.8] rad (34° of hyperextension,
+    ///   160° of flexion): beyond any person's passive range, and wide
+    ///   enough to replay the recorded open-loop plant.md lifts (26.7° of
+    ///   hyperextension, 34° in the provisional model's worst case,
+    ///   `kernel/tests/replay.rs`); a clinician's limits are far narrower
+    ///   (default 5°);
+    /// - the workspace box within ±1.5 m of the base (the arm reaches
+    ///   under 0.7 m).
+    pub const CEILING: SafetyLimits = SafetyLimits {
+        max_force: 140.0,
+        max_torque: 20.0,
+        max_force_rate: 2000.0,
+        max_speed: 0.25,
+        rate_window: 0.5,
+        shoulder_elevation: Interval::new(-0.5, 2.8),
+        elbow_flexion: Interval::new(-0.6, 2.8),
+        max_model_mismatch: 0.10,
+        table_tolerance: 0.02,
+        workspace_x: Interval::new(-1.5, 1.5),
+        workspace_z: Interval::new(-1.5, 1.5),
+        max_sensor_age: 0.1,
+    };
+
+    /// Checks every limit: finite, positive (the table tolerance: not
+    /// negative), intervals not empty, and nothing beyond
+    /// [`SafetyLimits::CEILING`].
+    ///
+    /// # Errors
+    /// The first unusable field and what is wrong with it.
+    pub fn check(&self) -> Result<(), ConfigError> {
+        use ConfigField as F;
+        let c = &Self::CEILING;
+        let scalars = [
+            (F::MaxForce, self.max_force, c.max_force),
+            (F::MaxTorque, self.max_torque, c.max_torque),
+            (F::MaxForceRate, self.max_force_rate, c.max_force_rate),
+            (F::MaxSpeed, self.max_speed, c.max_speed),
+            (F::RateWindow, self.rate_window, c.rate_window),
+            (
+                F::MaxModelMismatch,
+                self.max_model_mismatch,
+                c.max_model_mismatch,
+            ),
+            (F::MaxSensorAge, self.max_sensor_age, c.max_sensor_age),
+            (F::TableTolerance, self.table_tolerance, c.table_tolerance),
+        ];
+        for (field, value, ceiling) in scalars {
+            if field == F::TableTolerance {
+                non_negative(field, value)?;
+            } else {
+                positive(field, value)?;
+            }
+            if value > ceiling {
+                return Err(ConfigError::new(field, ConfigProblem::BeyondCeiling));
+            }
+        }
+        let ranges = [
+            (
+                F::ShoulderElevation,
+                self.shoulder_elevation,
+                c.shoulder_elevation,
+            ),
+            (F::ElbowFlexion, self.elbow_flexion, c.elbow_flexion),
+            (F::WorkspaceX, self.workspace_x, c.workspace_x),
+            (F::WorkspaceZ, self.workspace_z, c.workspace_z),
+        ];
+        for (field, range, widest) in ranges {
+            range.check(field)?;
+            if range.low < widest.low || range.high > widest.high {
+                return Err(ConfigError::new(field, ConfigProblem::BeyondCeiling));
+            }
+        }
+        Ok(())
+    }
+}
+
 /// The whole kernel configuration.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -164,119 +268,185 @@ impl Default for KernelConfig {
     }
 }
 
-/// Which configuration value is unusable.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub enum ConfigError {
-    /// An impedance gain is non-finite or not positive.
-    ImpedanceGain,
-    /// A force, torque, rate or speed limit is non-finite or not positive.
-    Limit,
-    /// A range is non-finite or empty.
-    Range,
-    /// An estimation-motion parameter is non-finite or out of range.
-    EstimationMotion,
-    /// A planned speed is not positive or exceeds the speed limit.
-    PlannedSpeed,
-    /// A validation limit is non-finite or inconsistent.
-    Validation,
-    /// A lift-shaping value is non-finite or not positive.
-    LiftShaping,
-}
-
-impl ConfigError {
-    /// Stable numeric code of the group of values.
-    pub const fn code(&self) -> u16 {
-        match self {
-            ConfigError::ImpedanceGain => 1,
-            ConfigError::Limit => 2,
-            ConfigError::Range => 3,
-            ConfigError::EstimationMotion => 4,
-            ConfigError::PlannedSpeed => 5,
-            ConfigError::Validation => 6,
-            ConfigError::LiftShaping => 7,
+impl KernelConfig {
+    /// Checks every value, group by group in the order of the fields.
+    ///
+    /// # Errors
+    /// The first unusable field and what is wrong with it.
+    pub fn check(&self) -> Result<(), ConfigError> {
+        use ConfigField as F;
+        let g = &self.impedance;
+        for v in g.stiffness {
+            positive(F::ImpedanceStiffness, v)?;
         }
+        for v in g.inertia {
+            positive(F::ImpedanceInertia, v)?;
+        }
+        positive(F::ImpedanceDampingRatio, g.damping_ratio)?;
+        let l = &self.limits;
+        l.check()?;
+        let m = &self.estimation_motion;
+        positive(F::LiftLength, m.lift_length)?;
+        finite(F::LiftAngle, m.lift_angle)?;
+        non_negative(F::HoldTime, m.hold_time)?;
+        for (field, speed) in [
+            (F::EstimationPeakSpeed, m.peak_speed),
+            (F::ManipulationPeakSpeed, self.manipulation_peak_speed),
+        ] {
+            positive(field, speed)?;
+            if speed > l.max_speed {
+                return Err(ConfigError::new(field, ConfigProblem::AboveSpeedLimit));
+            }
+        }
+        self.lift_shaping.check()?;
+        let v = &self.validation;
+        all_positive(&[
+            (F::MinUpperArmLength, v.min_upper_arm_length),
+            (F::MaxUpperArmLength, v.max_upper_arm_length),
+            (F::MinForearmLength, v.min_forearm_length),
+            (F::MaxForearmLength, v.max_forearm_length),
+            (F::MinArc, v.min_arc),
+            (F::MaxResidual, v.max_residual),
+            (F::MaxMethodDisagreement, v.max_method_disagreement),
+            (F::MaxGeometryMismatch, v.max_geometry_mismatch),
+            (F::MaxShoulderHeight, v.max_shoulder_height),
+        ])?;
+        for (field, min, max) in [
+            (
+                F::MaxUpperArmLength,
+                v.min_upper_arm_length,
+                v.max_upper_arm_length,
+            ),
+            (
+                F::MaxForearmLength,
+                v.min_forearm_length,
+                v.max_forearm_length,
+            ),
+        ] {
+            if min > max {
+                return Err(ConfigError::new(field, ConfigProblem::BelowMinimum));
+            }
+        }
+        Ok(())
     }
 }
 
-fn positive(value: f64) -> bool {
-    value.is_finite() && value > 0.0
-}
+/// Proof of REQ-CFG-001: no accepted limits lie beyond the ceilings.
+#[cfg(any(test, kani))]
+mod verification {
+    use super::*;
+    #[cfg(not(kani))]
+    use limb_kani_stand_in as kani;
 
-impl KernelConfig {
-    /// Checks every value.
-    ///
-    /// # Errors
-    /// The first unusable group of values.
-    pub fn check(&self) -> Result<(), ConfigError> {
-        let g = &self.impedance;
-        if !(g
-            .stiffness
-            .iter()
-            .chain(g.inertia.iter())
-            .all(|v| positive(*v))
-            && positive(g.damping_ratio))
-        {
-            return Err(ConfigError::ImpedanceGain);
-        }
-        let l = &self.limits;
-        let positives = [
-            l.max_force,
-            l.max_torque,
-            l.max_force_rate,
-            l.max_speed,
-            l.rate_window,
-            l.max_model_mismatch,
-            l.max_sensor_age,
+    /// REQ-CFG-001: what an accepted set of limits must satisfy: every
+    /// scalar positive (the table tolerance not negative) and at most its
+    /// ceiling, every range non-empty and inside the widest range.
+    pub fn check_within_ceilings(l: &SafetyLimits) -> Result<(), &'static str> {
+        let c = &SafetyLimits::CEILING;
+        let scalars = [
+            (l.max_force, c.max_force),
+            (l.max_torque, c.max_torque),
+            (l.max_force_rate, c.max_force_rate),
+            (l.max_speed, c.max_speed),
+            (l.rate_window, c.rate_window),
+            (l.max_model_mismatch, c.max_model_mismatch),
+            (l.max_sensor_age, c.max_sensor_age),
         ];
-        if !(positives.iter().all(|v| positive(*v))
-            && l.table_tolerance.is_finite()
-            && l.table_tolerance >= 0.0)
-        {
-            return Err(ConfigError::Limit);
+        if !scalars.iter().all(|&(v, top)| 0.0 < v && v <= top) {
+            return Err("a scalar limit not in (0, ceiling]");
+        }
+        if !(0.0 <= l.table_tolerance && l.table_tolerance <= c.table_tolerance) {
+            return Err("table tolerance not in [0, ceiling]");
         }
         let ranges = [
-            l.shoulder_elevation,
-            l.elbow_flexion,
-            l.workspace_x,
-            l.workspace_z,
+            (l.shoulder_elevation, c.shoulder_elevation),
+            (l.elbow_flexion, c.elbow_flexion),
+            (l.workspace_x, c.workspace_x),
+            (l.workspace_z, c.workspace_z),
         ];
-        if !ranges.iter().all(Interval::is_valid) {
-            return Err(ConfigError::Range);
-        }
-        let m = &self.estimation_motion;
-        if !(positive(m.lift_length) && m.lift_angle.is_finite() && m.hold_time.is_finite())
-            || m.hold_time < 0.0
+        if !ranges
+            .iter()
+            .all(|(r, w)| w.low <= r.low && r.low <= r.high && r.high <= w.high)
         {
-            return Err(ConfigError::EstimationMotion);
-        }
-        for speed in [m.peak_speed, self.manipulation_peak_speed] {
-            if !positive(speed) || speed > l.max_speed {
-                return Err(ConfigError::PlannedSpeed);
-            }
-        }
-        let v = &self.validation;
-        let validation = [
-            v.min_upper_arm_length,
-            v.max_upper_arm_length,
-            v.min_forearm_length,
-            v.max_forearm_length,
-            v.min_arc,
-            v.max_residual,
-            v.max_method_disagreement,
-            v.max_geometry_mismatch,
-            v.max_shoulder_height,
-        ];
-        if !(validation.iter().all(|x| positive(*x))
-            && v.min_upper_arm_length <= v.max_upper_arm_length
-            && v.min_forearm_length <= v.max_forearm_length)
-        {
-            return Err(ConfigError::Validation);
-        }
-        if !self.lift_shaping.is_valid() {
-            return Err(ConfigError::LiftShaping);
+            return Err("a range empty or beyond its widest");
         }
         Ok(())
+    }
+
+    /// REQ-CFG-001: any force, speed and sensor-age limit and any elbow
+    /// range (the other fields go through the same two loops) are accepted
+    /// only within the ceilings; the ceilings themselves are accepted. No
+    /// loop depends on the inputs: the loops run over fixed arrays of 8
+    /// scalars and 4 ranges (unwind 9).
+    #[cfg_attr(kani, kani::proof)]
+    #[cfg_attr(kani, kani::unwind(9))]
+    pub fn verify_req_cfg_001_no_limits_beyond_the_ceilings() {
+        let mut limits = if kani::any() {
+            SafetyLimits::CEILING
+        } else {
+            SafetyLimits::default()
+        };
+        if kani::any() {
+            limits.max_force = kani::any();
+            limits.max_speed = kani::any();
+            limits.max_sensor_age = kani::any();
+            limits.elbow_flexion = Interval::new(kani::any(), kani::any());
+        }
+        let verdict = limits.check();
+        if verdict.is_ok() {
+            assert_eq!(check_within_ceilings(&limits), Ok(()));
+        }
+        if limits == SafetyLimits::CEILING {
+            assert_eq!(verdict, Ok(()));
+        }
+        kani::cover!(verdict.is_ok(), "limits: accepted");
+        kani::cover!(
+            verdict.is_err_and(|e| e.problem == ConfigProblem::BeyondCeiling),
+            "limits: beyond a ceiling"
+        );
+        kani::cover!(
+            verdict.is_err_and(|e| e.problem == ConfigProblem::NonFinite),
+            "limits: not finite"
+        );
+    }
+
+    #[cfg(test)]
+    mod tests {
+        use super::*;
+        use proptest::prelude::*;
+
+        #[test]
+        fn harnesses_under_the_stand_in() {
+            kani::check(
+                "limit ceilings",
+                20_000,
+                verify_req_cfg_001_no_limits_beyond_the_ceilings,
+            );
+        }
+
+        proptest! {
+            /// REQ-CFG-001: limits drawn across and beyond the ceilings are
+            /// accepted exactly when they lie within them.
+            #[test]
+            fn req_cfg_001_limits_are_accepted_exactly_within_the_ceilings(
+                force in -10.0..300.0f64, speed in -0.1..0.5f64,
+                age in -0.05..0.2f64, low in -1.0..0.5f64, high in -0.5..3.5f64,
+                tolerance in -0.01..0.05f64,
+            ) {
+                let limits = SafetyLimits {
+                    max_force: force,
+                    max_speed: speed,
+                    max_sensor_age: age,
+                    elbow_flexion: Interval::new(low, high),
+                    table_tolerance: tolerance,
+                    ..SafetyLimits::default()
+                };
+                prop_assert_eq!(
+                    limits.check().is_ok(),
+                    check_within_ceilings(&limits).is_ok()
+                );
+            }
+        }
     }
 }
 
@@ -292,24 +462,79 @@ mod tests {
     // Each case changes one field of the default on purpose.
     #[allow(clippy::field_reassign_with_default)]
     #[test]
-    fn each_group_is_checked() {
-        let mut c = KernelConfig::default();
-        c.impedance.stiffness[2] = f64::NAN;
-        assert_eq!(c.check(), Err(ConfigError::ImpedanceGain));
-        let mut c = KernelConfig::default();
-        c.limits.max_force = 0.0;
-        assert_eq!(c.check(), Err(ConfigError::Limit));
-        let mut c = KernelConfig::default();
-        c.limits.elbow_flexion = Interval::new(1.0, 0.0);
-        assert_eq!(c.check(), Err(ConfigError::Range));
-        let mut c = KernelConfig::default();
-        c.estimation_motion.lift_length = -1.0;
-        assert_eq!(c.check(), Err(ConfigError::EstimationMotion));
-        let mut c = KernelConfig::default();
-        c.manipulation_peak_speed = 1.0;
-        assert_eq!(c.check(), Err(ConfigError::PlannedSpeed));
+    fn the_first_unusable_field_is_named() {
+        use ConfigField as F;
+        use ConfigProblem as P;
+        type Case = (fn(&mut KernelConfig), ConfigField, ConfigProblem);
+        let cases: [Case; 12] = [
+            (
+                |c| c.limits.max_force = 4.1e224,
+                F::MaxForce,
+                P::BeyondCeiling,
+            ),
+            (
+                |c| c.limits.elbow_flexion.low = -0.7,
+                F::ElbowFlexion,
+                P::BeyondCeiling,
+            ),
+            (
+                |c| c.impedance.stiffness[2] = f64::NAN,
+                F::ImpedanceStiffness,
+                P::NonFinite,
+            ),
+            (
+                |c| c.impedance.damping_ratio = 0.0,
+                F::ImpedanceDampingRatio,
+                P::NotPositive,
+            ),
+            (|c| c.limits.max_force = 0.0, F::MaxForce, P::NotPositive),
+            (
+                |c| c.limits.table_tolerance = -1e-3,
+                F::TableTolerance,
+                P::Negative,
+            ),
+            (
+                |c| c.limits.elbow_flexion = Interval::new(1.0, 0.0),
+                F::ElbowFlexion,
+                P::EmptyInterval,
+            ),
+            (
+                |c| c.limits.workspace_z.high = f64::INFINITY,
+                F::WorkspaceZ,
+                P::NonFinite,
+            ),
+            (
+                |c| c.estimation_motion.lift_length = -1.0,
+                F::LiftLength,
+                P::NotPositive,
+            ),
+            (
+                |c| c.manipulation_peak_speed = 1.0,
+                F::ManipulationPeakSpeed,
+                P::AboveSpeedLimit,
+            ),
+            (
+                |c| c.lift_shaping.extension = 0.0,
+                F::Extension,
+                P::NotPositive,
+            ),
+            (
+                |c| c.validation.min_forearm_length = 0.5,
+                F::MaxForearmLength,
+                P::BelowMinimum,
+            ),
+        ];
+        for (change, field, problem) in cases {
+            let mut c = KernelConfig::default();
+            change(&mut c);
+            assert_eq!(c.check(), Err(ConfigError::new(field, problem)));
+        }
         let mut c = KernelConfig::default();
         c.validation.max_residual = f64::INFINITY;
-        assert_eq!(c.check(), Err(ConfigError::Validation));
+        let error = c.check().unwrap_err();
+        assert_eq!(error.code(), 606);
+        let mut text = heapless::String::<64>::new();
+        core::fmt::Write::write_fmt(&mut text, format_args!("{error}")).unwrap();
+        assert_eq!(text.as_str(), "validation.max_residual: non_finite");
     }
 }

@@ -163,6 +163,9 @@ impl Kernel {
             Err(reason) => return self.stop(reason, now, Some(frame.pose)),
         };
         let out = self.law.command(frame.pose, rates.velocity, set_point);
+        if let Err(violation) = self.check_set_point(&out.set_point) {
+            return self.stop(StopReason::Monitor(violation), now, Some(frame.pose));
+        }
         let command = Command {
             state: self.state.kind(),
             mode,
@@ -208,7 +211,14 @@ impl Kernel {
                     refuse(RefusalReason::NoFreshMeasurement),
                 )),
                 Some(pose) => {
-                    match grasp.start_estimation(pose, now, &self.config.estimation_motion) {
+                    // The motion starts where the arm is held (the hold
+                    // set-point), not at the latest measurement: the
+                    // set-point must not step by the measurement's noise
+                    // (a joint-position robot turns a 0.2 mm step in one
+                    // period into a force spike). The fresh measurement
+                    // gates the request.
+                    let start = grasp.held().unwrap_or(pose);
+                    match grasp.start_estimation(start, now, &self.config.estimation_motion) {
                         Ok(estimate) => {
                             self.path.clear();
                             Ok(State::Estimate(estimate))
@@ -308,6 +318,21 @@ impl Kernel {
                 table_tolerance: l.table_tolerance,
             },
         )
+    }
+
+    /// REQ-MON-012: in a state that moves the arm (Estimate, Manipulate)
+    /// the set-point about to be commanded is checked against the same
+    /// workspace box and table as the measured pose (and, with a model,
+    /// the elbow it implies): a set-point outside is a violation before it
+    /// reaches the robot.
+    fn check_set_point(&self, set_point: &SetPoint) -> Verdict {
+        if !matches!(self.state, State::Estimate(_) | State::Manipulate(_)) {
+            return Ok(());
+        }
+        let (_, workspace) = self.geometry_monitors();
+        let pose = set_point.pose;
+        let arm = self.state.arm().map(ValidatedArm::geometry);
+        workspace.check(pose, arm.map(|a| a.elbow_from_pose(pose)))
     }
 
     /// The monitors that apply to the current state (watchdog excluded).
@@ -480,13 +505,14 @@ mod verification {
     /// Where the arm rests at the start of a session (frame S origin).
     const REST: Pose = Pose::new(0.0, 0.0, 0.0);
 
-    /// REQ-MON-006, REQ-MON-007, REQ-CMD-001: what one step must give for
-    /// `frame` at `now` from a state of kind `before`, decided without a
-    /// square root: the command's invariants
-    /// ([`Command::check_components`]), the stop command from SafeStop, and
-    /// a stop in the same step for any fault visible without a model (bad
+    /// REQ-MON-006, REQ-MON-007, REQ-MON-012, REQ-CMD-001: what one step
+    /// must give for `frame` at `now` from a state of kind `before`, decided
+    /// without a square root: the command's invariants
+    /// ([`Command::check_components`]), the stop command from SafeStop, a
+    /// stop in the same step for any fault visible without a model (bad
     /// clock or frame, stale or future frame, a force component, the torque
-    /// or the grasp point beyond its limit).
+    /// or the grasp point beyond its limit), and, in a state that moves the
+    /// arm, a set-point inside the workspace box and above the table.
     pub fn check_step(
         before: StateKind,
         frame: &PathSample,
@@ -511,6 +537,16 @@ mod verification {
             && limits.workspace_z.contains(p.z));
         if (fault || before == StateKind::SafeStop) && command.state != StateKind::SafeStop {
             return Err("a fault or SafeStop did not give the stop command");
+        }
+        let moving = matches!(command.state, StateKind::Estimate | StateKind::Manipulate);
+        if let (true, Some(s)) = (moving, command.set_point) {
+            let q = s.pose;
+            if !(q.z >= floor
+                && limits.workspace_x.contains(q.x)
+                && limits.workspace_z.contains(q.z))
+            {
+                return Err("a set-point outside the workspace was commanded");
+            }
         }
         Ok(())
     }
@@ -580,8 +616,8 @@ mod verification {
         kani::cover!(command.state == StateKind::SafeStop, "grasp step: stops");
     }
 
-    /// REQ-PANIC-001, REQ-CMD-001, REQ-MON-006, REQ-MON-007: one step
-    /// during the estimation (the first of a fresh lift: one sample
+    /// REQ-PANIC-001, REQ-CMD-001, REQ-MON-006, REQ-MON-007, REQ-MON-012:
+    /// one step during the estimation (the first of a fresh lift: one sample
     /// recorded into the online estimate, the lift shaped; the online
     /// estimator's catch-up loop runs only after 50 judged samples) with
     /// any frame and clock never panics, commands within the limits and
@@ -626,8 +662,8 @@ mod verification {
         );
     }
 
-    /// REQ-PANIC-001, REQ-CMD-001, REQ-MON-006, REQ-MON-007: one step while
-    /// manipulating with any frame and clock never panics, commands within
+    /// REQ-PANIC-001, REQ-CMD-001, REQ-MON-006, REQ-MON-007, REQ-MON-012:
+    /// one step while manipulating with any frame and clock never panics, commands within
     /// the limits and stops on any fault in the same step.
     #[cfg_attr(kani, kani::proof)]
     #[cfg_attr(kani, kani::unwind(17))]

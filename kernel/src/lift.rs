@@ -31,7 +31,7 @@
 //! lift ends when that worst case comes within `joint_margin` of a limit;
 //! the joint-limit monitor stops the kernel if it ever crosses one.
 
-use crate::config::{KernelConfig, SafetyLimits};
+use crate::config::{all_positive, ConfigError, ConfigField, KernelConfig, SafetyLimits};
 use crate::estimation::online::{JointEnvelope, OnlineEstimator};
 use crate::estimation::refine::Refinement;
 use crate::geometry::Pose;
@@ -93,21 +93,23 @@ impl Default for LiftShaping {
 }
 
 impl LiftShaping {
-    /// True when every value is finite and positive.
-    pub fn is_valid(&self) -> bool {
-        [
-            self.prior_reach,
-            self.forearm_wait,
-            self.target_arc,
-            self.joint_margin,
-            self.settle_time,
-            self.hold_speed,
-            self.hold_rate,
-            self.hold_move_time,
-            self.extension,
-        ]
-        .iter()
-        .all(|v| v.is_finite() && *v > 0.0)
+    /// Checks that every value is finite and positive.
+    ///
+    /// # Errors
+    /// The first field that is not.
+    pub fn check(&self) -> Result<(), ConfigError> {
+        use ConfigField as F;
+        all_positive(&[
+            (F::PriorReach, self.prior_reach),
+            (F::ForearmWait, self.forearm_wait),
+            (F::TargetArc, self.target_arc),
+            (F::JointMargin, self.joint_margin),
+            (F::SettleTime, self.settle_time),
+            (F::HoldSpeed, self.hold_speed),
+            (F::HoldRate, self.hold_rate),
+            (F::HoldMoveTime, self.hold_move_time),
+            (F::Extension, self.extension),
+        ])
     }
 }
 
@@ -121,6 +123,18 @@ pub enum LiftEnd {
     JointMargin(Limit),
     /// The planned lift and its extension were complete.
     MotionComplete,
+}
+
+impl LiftEnd {
+    /// Stable numeric code of the reason (the limit has its own,
+    /// [`Limit::code`]).
+    pub const fn code(&self) -> u16 {
+        match self {
+            LiftEnd::ArcReached => 1,
+            LiftEnd::JointMargin(_) => 2,
+            LiftEnd::MotionComplete => 3,
+        }
+    }
 }
 
 /// Where the lift is.

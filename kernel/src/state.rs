@@ -196,6 +196,11 @@ impl Grasp {
         SetPoint::hold(*self.hold.get_or_insert(measured))
     }
 
+    /// The pose held, once latched (frame S).
+    pub fn held(&self) -> Option<Pose> {
+        self.hold
+    }
+
     /// Starts the estimation motion from grasp pose `grasp` at time `now`.
     ///
     /// # Errors
@@ -474,7 +479,8 @@ impl State {
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Request {
-    /// Grasp → Estimate: start the estimation motion from the current pose.
+    /// Grasp → Estimate: start the estimation motion from the held pose
+    /// (refused without a fresh measurement).
     StartEstimation,
     /// Validated → Manipulate: move the arm to these joint angles.
     ApproveManipulation(JointAngles),

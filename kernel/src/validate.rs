@@ -119,6 +119,43 @@ pub enum Rejection {
     ShoulderOffTable(f64),
 }
 
+impl Rejection {
+    /// Stable numeric code of the failed check (the value it carries is
+    /// not part of the code).
+    pub const fn code(&self) -> u16 {
+        match self {
+            Rejection::NonFinite => 1,
+            Rejection::UpperArmLengthOutOfRange(_) => 2,
+            Rejection::ForearmLengthOutOfRange(_) => 3,
+            Rejection::ForearmArcTooShort(_) => 4,
+            Rejection::UpperArmArcTooShort(_) => 5,
+            Rejection::ForearmResidualTooLarge(_) => 6,
+            Rejection::UpperArmResidualTooLarge(_) => 7,
+            Rejection::MethodsDisagree(_) => 8,
+            Rejection::NoIndependentMethod => 9,
+            Rejection::GeometryInconsistent(_) => 10,
+            Rejection::ShoulderOffTable(_) => 11,
+        }
+    }
+
+    /// The value the check found (in the check's unit: m, rad), where it
+    /// carries one.
+    pub const fn value(&self) -> Option<f64> {
+        match self {
+            Rejection::NonFinite | Rejection::NoIndependentMethod => None,
+            Rejection::UpperArmLengthOutOfRange(v)
+            | Rejection::ForearmLengthOutOfRange(v)
+            | Rejection::ForearmArcTooShort(v)
+            | Rejection::UpperArmArcTooShort(v)
+            | Rejection::ForearmResidualTooLarge(v)
+            | Rejection::UpperArmResidualTooLarge(v)
+            | Rejection::MethodsDisagree(v)
+            | Rejection::GeometryInconsistent(v)
+            | Rejection::ShoulderOffTable(v) => Some(*v),
+        }
+    }
+}
+
 /// An arm model that passed validation. Only [`validate`] makes one.
 ///
 /// REQ-VAL-002: it cannot be built any other way; this does not compile:

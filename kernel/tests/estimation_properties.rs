@@ -2,7 +2,8 @@
 
 use limb_kernel::estimation::{
     estimate_arm, fit_circle_geometric, fit_circle_kasa, fit_circle_taubin, hough_circle_chords,
-    hough_circle_normals, ArmEstimate, Circle, FitEvidence, GraspCorrection, Method, PointModel,
+    hough_circle_normals, ArmEstimate, Circle, CircleFitError, FitEvidence, GraspCorrection,
+    Method, PointModel,
 };
 use limb_kernel::geometry::{Point, Pose, Wrench};
 use limb_kernel::path::PathSample;
@@ -51,6 +52,11 @@ proptest! {
                             ("hough normals", normals), ("hough chords", chords)] {
             prop_assert!(close(fit, centre, radius, EXACT), "{name}: {fit:?}");
         }
+        // The arc seen from the centre between the first and last point
+        // (0..π: a longer span is seen the short way round).
+        let seen = if span <= std::f64::consts::PI { span } else { std::f64::consts::TAU - span };
+        let arc = Circle { centre, radius }.arc(points());
+        prop_assert!((arc - seen).abs() < 1e-9, "arc {arc} for a span of {span}");
     }
 
     /// The fast corrected point equals the fit point under the corrections.
@@ -184,5 +190,63 @@ fn degenerate_inputs_are_typed_errors() {
                 path.first()
             );
         }
+    }
+}
+
+/// On noisy arcs (±4 mm) Taubin's fit stays within 1 mm of the geometric
+/// fit, and on a short arc, where Kåsa's fit is pulled toward a smaller
+/// circle (its known bias), far closer than Kåsa's: the characteristic
+/// polynomial and its Newton iteration must reach the true root (at 0,
+/// Taubin's formula gives Kåsa's answer). The noise-free arcs above cannot
+/// tell them apart (there the root is 0).
+#[test]
+fn taubin_is_near_the_geometric_fit_on_noisy_arcs() {
+    // Deterministic uniform noise of ±4 mm (a 64-bit LCG, Knuth's MMIX
+    // constants).
+    let mut state = 0x9E37_79B9_7F4A_7C15u64;
+    let mut noise = move || {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 0.008
+    };
+    let (centre, radius) = (Point::new(0.12, -0.05), 0.3);
+    for span in [0.7, 1.5, 2.5] {
+        let points: Vec<Point> = arc(centre, radius, 0.2, span, 300)
+            .into_iter()
+            .map(|(p, _)| Point::new(p.x + noise(), p.z + noise()))
+            .collect();
+        let kasa = fit_circle_kasa(points.iter().copied()).unwrap();
+        let taubin = fit_circle_taubin(points.iter().copied()).unwrap();
+        let geometric = fit_circle_geometric(points.iter().copied(), taubin)
+            .unwrap()
+            .circle;
+        let off =
+            |c: Circle| (c.radius - geometric.radius).abs() + c.centre.distance(geometric.centre);
+        assert!(
+            off(taubin) < 1e-3,
+            "span {span}: {taubin:?} vs {geometric:?}"
+        );
+        if span < 1.0 {
+            assert!(off(taubin) < 0.2 * off(kasa), "{taubin:?} vs {kasa:?}");
+        }
+    }
+}
+
+/// Points on a circle far larger than any arm segment (radius 10 km, a
+/// 0.5 m arc: straight for this application) are refused as degenerate,
+/// not returned as a huge circle.
+#[test]
+fn a_circle_beyond_the_largest_radius_is_degenerate() {
+    let radius = 1.0e4;
+    let points: Vec<Point> = arc(Point::new(0.0, -radius), radius, -2.5e-5, 5.0e-5, 50)
+        .into_iter()
+        .map(|(p, _)| p)
+        .collect();
+    for (name, fit) in [
+        ("kasa", fit_circle_kasa(points.iter().copied())),
+        ("taubin", fit_circle_taubin(points.iter().copied())),
+    ] {
+        assert_eq!(fit, Err(CircleFitError::Degenerate), "{name}");
     }
 }

@@ -59,15 +59,71 @@ fn the_estimation_motion_is_its_lift_then_a_hold() {
         motion.total_duration(),
         lift.duration() + parameters.hold_time
     ));
+    assert!(!motion.is_finished(motion.total_duration() - 1e-6));
+    assert!(motion.is_finished(motion.total_duration()));
+}
+
+/// REQ-MON-011: without a provisional forearm (a wrist that never turns: no
+/// arc to fit) the shaped lift never commands a set-point beyond
+/// `LiftShaping::prior_reach` of the grasp: it pauses there, and ends in
+/// `ForearmPhaseTooShort` once `forearm_wait` has passed (HAZ-08).
+#[test]
+fn req_mon_011_without_a_forearm_the_lift_stays_within_the_prior_reach() {
+    use limb_kernel::estimation::online::OnlineEstimator;
+    use limb_kernel::estimation::EstimateError;
+    use limb_kernel::geometry::Wrench;
+    use limb_kernel::lift::{LiftCommand, LiftPhase, ShapedLift};
+    use limb_kernel::{KernelConfig, PathSample};
+    let config = KernelConfig::default();
+    let grasp = Pose::new(0.45, 0.0, 0.0);
+    let motion = EstimationMotion::new(grasp, &config.estimation_motion).unwrap();
+    let mut lift = ShapedLift::new(motion, 0.0);
+    let online = OnlineEstimator::new();
+    let reach = config.lift_shaping.prior_reach;
+    let mut paused = false;
+    let mut farthest: f64 = 0.0;
+    let period = 0.001;
+    let steps = ((motion.total_duration() + config.lift_shaping.forearm_wait) / period) as usize;
+    for k in 1..=steps + 1000 {
+        let now = k as f64 * period;
+        let frame = PathSample {
+            time: now,
+            pose: grasp,
+            wrench: Wrench::default(),
+        };
+        match lift.advance(now, &frame, &online, &config) {
+            Ok(LiftCommand::Move(set_point) | LiftCommand::Hold(set_point)) => {
+                farthest = farthest.max(set_point.pose.point().distance(grasp.point()));
+                paused |= matches!(lift.phase(), LiftPhase::AwaitingForearm { .. });
+            }
+            Err(error) => {
+                assert_eq!(error, EstimateError::ForearmPhaseTooShort);
+                assert!(paused, "ended without pausing");
+                assert!(farthest <= reach, "set-point {farthest} m out");
+                assert!(
+                    farthest > 0.5 * reach,
+                    "the lift hardly moved: {farthest} m"
+                );
+                return;
+            }
+        }
+    }
+    panic!("no end after the lift and the wait; set-point reached {farthest} m");
 }
 
 #[test]
 fn a_zero_hold_is_a_valid_configuration_and_a_negative_one_is_not() {
-    use limb_kernel::config::ConfigError;
+    use limb_kernel::config::{ConfigError, ConfigField, ConfigProblem};
     use limb_kernel::KernelConfig;
     let mut config = KernelConfig::default();
     config.estimation_motion.hold_time = 0.0;
     assert_eq!(config.check(), Ok(()));
     config.estimation_motion.hold_time = -1e-9;
-    assert_eq!(config.check(), Err(ConfigError::EstimationMotion));
+    assert_eq!(
+        config.check(),
+        Err(ConfigError::new(
+            ConfigField::HoldTime,
+            ConfigProblem::Negative
+        ))
+    );
 }

@@ -10,11 +10,10 @@
 //! [`params`] (arm and robot parameters, plant.md defaults),
 //! [`dynamics`] (M, C, g, J, J̇ q̇ of the arm), [`contact`] (the table's two
 //! unilateral constraints), [`plant`] (state, step, measurement),
-//! [`noise`] (the seeded Gaussian generator), [`operator`] (the requests a
-//! person makes of the kernel in a closed-loop session), [`scripted`] (the estimation
+//! [`noise`] (the seeded Gaussian generator), [`scripted`] (the estimation
 //! run), [`log`] (the CSV log format: writer and the strict reader; with
-//! the `std` feature), [`session`] (one whole closed-loop kernel session,
-//! shared by `limb run` and the firmware).
+//! the `std` feature), [`robot`] (the plant as the robot of a
+//! `limb-session` session, shared by `limb run` and the firmware).
 //!
 //! # Targets
 //! Without its default `std` feature the crate is `no_std` (it needs
@@ -35,11 +34,10 @@ pub mod effects;
 #[cfg(feature = "std")]
 pub mod log;
 pub mod noise;
-pub mod operator;
 pub mod params;
 pub mod plant;
+pub mod robot;
 pub mod scripted;
-pub mod session;
 
 pub use effects::{Effect, EffectError, Effects};
 pub use params::{ArmParameters, PlantParameters, RobotParameters, BENCHMARK_ARMS};

@@ -26,7 +26,7 @@ use crate::plant::Truth;
 use crate::scripted::Row;
 use limb_kernel::geometry::{Point, Pose, Wrench};
 use limb_kernel::path::PathSample;
-use std::fmt::Write as _;
+use limb_session::log::{header, Row as SessionRow};
 use std::path::Path;
 
 /// The header the writer emits (`plant.md`).
@@ -113,39 +113,40 @@ impl Record {
     }
 }
 
-/// Writes records as CSV text with [`HEADER`]; absent values are empty.
+/// The ground-truth columns after the session log's own
+/// ([`limb_session::log::COLUMNS`]).
+pub const TRUTH_COLUMNS: [&str; 6] = ["q1", "q2", "elbow_x", "elbow_z", "shoulder_x", "shoulder_z"];
+
+/// The truth columns' values (`None`: empty).
+pub fn truth_values(truth: Option<&Truth>) -> [Option<f64>; 6] {
+    let values = truth.map(|t| {
+        [
+            t.q[0],
+            t.q[1],
+            t.elbow.x,
+            t.elbow.z,
+            t.shoulder.x,
+            t.shoulder.z,
+        ]
+    });
+    core::array::from_fn(|i| values.map(|v| v[i]))
+}
+
+/// Writes records as CSV text with [`HEADER`] (the session log's rows
+/// with the truth columns); absent values are empty.
 pub fn to_csv(records: &[Record]) -> String {
     let mut text = String::with_capacity(200 * (records.len() + 1));
-    text.push_str(HEADER);
-    text.push('\n');
+    text.push_str(&header(&TRUTH_COLUMNS));
     for r in records {
-        let command = r.command.map(|p| [p.x, p.z, p.psi]);
-        let truth = r.truth.map(|t| {
-            [
-                t.q[0],
-                t.q[1],
-                t.elbow.x,
-                t.elbow.z,
-                t.shoulder.x,
-                t.shoulder.z,
-            ]
-        });
-        let mut fields: Vec<Option<f64>> = Vec::with_capacity(17);
-        fields.push(Some(r.time));
-        fields.extend((0..3).map(|i| command.map(|c| c[i])));
-        fields.extend([Some(r.pose.x), r.lateral, Some(r.pose.z), Some(r.pose.psi)]);
-        fields.extend([r.wrench.fx, r.wrench.fz, r.wrench.ty].map(Some));
-        fields.extend((0..6).map(|i| truth.map(|t| t[i])));
-        for (i, field) in fields.iter().enumerate() {
-            if i > 0 {
-                text.push(',');
-            }
-            if let Some(value) = field {
-                // Writing into a String cannot fail.
-                let _ = write!(text, "{value}");
-            }
+        SessionRow {
+            time: r.time,
+            command: r.command,
+            pose: r.pose,
+            lateral: r.lateral,
+            wrench: r.wrench,
+            extra: &truth_values(r.truth.as_ref()),
         }
-        text.push('\n');
+        .write(&mut text);
     }
     text
 }
@@ -275,6 +276,12 @@ mod tests {
     use proptest::prelude::*;
 
     const HEADER: &str = "t,x,z,psi,fx,fz,ty,q1\n";
+
+    #[test]
+    fn the_header_is_the_session_log_with_the_truth() {
+        let text = limb_session::log::header(&super::TRUTH_COLUMNS);
+        assert_eq!(text, format!("{}\n", super::HEADER));
+    }
 
     #[test]
     fn reads_required_columns_and_ignores_extra_and_empty_ones() {

@@ -88,10 +88,16 @@ struct Sensed {
     wrench: [f64; 3],
 }
 
+/// The projected state and its dynamics at one instant (see
+/// [`Plant::resolve`]).
+type Resolved = (Vec2, Vec2, Option<Instant>);
+
 /// The plant.
 #[derive(Clone, Debug)]
 pub struct Plant {
     params: PlantParameters,
+    /// The robot's damping D (of `params.robot`, which never changes).
+    damping: [f64; 3],
     q: Vec2,
     qd: Vec2,
     steps: u64,
@@ -108,6 +114,11 @@ pub struct Plant {
     shoulder_velocity: Vec2,
     /// The grasp slip has happened.
     slipped: bool,
+    /// This instant's [`Plant::resolve`], once computed: a
+    /// [`Plant::measure`] and the [`Plant::step`] after it share it (the
+    /// state, set-point and time are the same), so an instant's dynamics
+    /// are solved once. Cleared by [`Plant::set`] and [`Plant::step`].
+    resolved: Option<Resolved>,
 }
 
 impl Plant {
@@ -131,6 +142,7 @@ impl Plant {
         params.check()?;
         Ok(Self {
             params,
+            damping: params.robot.damping(),
             q: [0.0, 0.0],
             qd: [0.0, 0.0],
             steps: 0,
@@ -142,6 +154,7 @@ impl Plant {
             shoulder_offset: [0.0, 0.0],
             shoulder_velocity: [0.0, 0.0],
             slipped: false,
+            resolved: None,
         })
     }
 
@@ -168,6 +181,7 @@ impl Plant {
     /// The set-point the robot follows until the next [`Plant::set`].
     pub fn set(&mut self, set_point: SetPoint) {
         self.set_point = set_point;
+        self.resolved = None;
     }
 
     /// The set-point the robot follows.
@@ -178,7 +192,7 @@ impl Plant {
     fn dynamics(&self, q: Vec2, qd: Vec2, set: ActiveSet) -> Option<Instant> {
         let a = &self.params.arm;
         let r = &self.params.robot;
-        let d = r.damping();
+        let d = self.damping;
         let mut t = arm_terms(a, q, qd);
         let mut v = apply(&t.jacobian, qd);
         if self.effects.shoulder_drift.is_some() {
@@ -241,7 +255,7 @@ impl Plant {
 
     /// Chooses the active set and returns the projected state with its
     /// dynamics (`plant.md`'s rule; the last candidate when none qualifies).
-    fn resolve(&self) -> (Vec2, Vec2, Option<Instant>) {
+    fn resolve(&self) -> Resolved {
         let bound = contact::at_bound(self.q, self.qd);
         let mut fallback = (self.q, self.qd, None);
         for set in CANDIDATES {
@@ -259,6 +273,16 @@ impl Plant {
             fallback = (q, qd, Some(instant));
         }
         fallback
+    }
+
+    /// [`Plant::resolve`] of this instant, computed once per instant.
+    fn resolve_once(&mut self) -> Resolved {
+        if let Some(resolved) = self.resolved {
+            return resolved;
+        }
+        let resolved = self.resolve();
+        self.resolved = Some(resolved);
+        resolved
     }
 
     /// What the sensors see at `instant`, noise-free: grasp compliance and
@@ -290,8 +314,9 @@ impl Plant {
     }
 
     /// The sensed values of this instant, `latency` old when it is on.
-    fn sensed(&self) -> Sensed {
-        let now = || self.sense(self.resolve().2);
+    fn sensed(&mut self) -> Sensed {
+        let instant = self.resolve_once().2;
+        let now = || self.sense(instant);
         let Some(latency) = self.effects.latency else {
             return now();
         };
@@ -307,7 +332,7 @@ impl Plant {
 
     /// One step of [`STEP`] seconds.
     pub fn step(&mut self) {
-        let (mut q, mut qd, instant) = self.resolve();
+        let (mut q, mut qd, instant) = self.resolved.take().unwrap_or_else(|| self.resolve());
         if let Some(latency) = self.effects.latency {
             let sensed = self.sense(instant);
             self.history.push_back(sensed);

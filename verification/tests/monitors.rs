@@ -97,3 +97,34 @@ fn req_mon_008_nominal_lift_is_quiet() {
     let (kernel, _) = kernel_after_lift(&arm(0.30, 0.20));
     assert_eq!(kernel.state().kind(), StateKind::Validated);
 }
+
+/// REQ-MON-012: the set-point is checked against the workspace before it is
+/// commanded: with the box's top 3 mm above the grasp, the estimation lift's
+/// set-point leaves the box while the measured grasp point stays at rest
+/// inside it, and the kernel stops on the set-point (WorkspaceZ, its z).
+#[test]
+fn req_mon_012_a_set_point_outside_the_workspace_stops() {
+    let mut config = limb_kernel::KernelConfig::default();
+    config.limits.workspace_z.high = 0.003;
+    let mut kernel = Kernel::new(config).unwrap();
+    let rest = Pose::default();
+    kernel.step(&frame(0.0, rest, Wrench::ZERO), 0.0);
+    kernel.request(Request::StartEstimation, 0.0).unwrap();
+    let mut highest = f64::NEG_INFINITY;
+    for i in 1..=3000 {
+        let t = f64::from(i) * 0.001;
+        let c = kernel.step(&frame(t, rest, Wrench::ZERO), t);
+        highest = highest.max(c.set_point.map_or(f64::NEG_INFINITY, |s| s.pose.z));
+        if kernel.state().kind() == StateKind::SafeStop {
+            break;
+        }
+    }
+    let State::SafeStop(stop) = kernel.state() else {
+        panic!("no stop: {:?}, highest {highest}", kernel.state().kind());
+    };
+    let StopReason::Monitor(violation) = stop.reason() else {
+        panic!("{:?}", stop.reason());
+    };
+    assert_eq!(violation.limit, Limit::WorkspaceZ);
+    assert!(violation.value > 0.003, "{violation:?}");
+}

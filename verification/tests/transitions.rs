@@ -132,7 +132,7 @@ fn req_sm_004_start_needs_fresh_data_and_a_sane_clock() {
 /// and an accepted change takes effect at the next step.
 #[test]
 fn req_sm_007_limits_change_only_while_held_and_only_when_valid() {
-    use limb_kernel::config::{ConfigError, SafetyLimits};
+    use limb_kernel::config::{ConfigError, ConfigField, ConfigProblem, SafetyLimits};
     use limb_kernel::LimitUpdateRefusal;
     let tighter = SafetyLimits {
         max_force: 5.0,
@@ -156,7 +156,10 @@ fn req_sm_007_limits_change_only_while_held_and_only_when_valid() {
     };
     assert_eq!(
         kernel.update_limits(invalid),
-        Err(LimitUpdateRefusal::Invalid(ConfigError::Limit))
+        Err(LimitUpdateRefusal::Invalid(ConfigError::new(
+            ConfigField::MaxSpeed,
+            ConfigProblem::NotPositive
+        )))
     );
     assert_eq!(kernel.config().limits, SafetyLimits::default());
     // The scenario's 11 N lift wrench is beyond a 5 N limit: the next step stops.
@@ -168,4 +171,39 @@ fn req_sm_007_limits_change_only_while_held_and_only_when_valid() {
         ..frame
     };
     assert_eq!(kernel.step(&next, t + 0.01).state, StateKind::SafeStop);
+}
+
+/// REQ-CFG-001: a limit update beyond the ceilings is refused with the
+/// field and the reason, whatever state the kernel is in, and the limits
+/// stay as they were: no update switches a monitor off by a huge value
+/// (the fuzz target `kernel_sequence` accepted a force limit of 4.1e224 N).
+#[test]
+fn req_cfg_001_limits_beyond_the_ceilings_are_refused() {
+    use limb_kernel::config::{ConfigError, ConfigField, ConfigProblem, SafetyLimits};
+    use limb_kernel::LimitUpdateRefusal;
+    let (mut kernel, _) = kernel_in(StateKind::Validated);
+    let huge = SafetyLimits {
+        max_force: 4.1e224,
+        ..SafetyLimits::default()
+    };
+    assert_eq!(
+        kernel.update_limits(huge),
+        Err(LimitUpdateRefusal::Invalid(ConfigError::new(
+            ConfigField::MaxForce,
+            ConfigProblem::BeyondCeiling
+        )))
+    );
+    assert_eq!(kernel.config().limits, SafetyLimits::default());
+    assert_eq!(kernel.update_limits(SafetyLimits::CEILING), Ok(()));
+    let slack = SafetyLimits {
+        max_sensor_age: 0.5,
+        ..SafetyLimits::CEILING
+    };
+    assert_eq!(
+        kernel.update_limits(slack),
+        Err(LimitUpdateRefusal::Invalid(ConfigError::new(
+            ConfigField::MaxSensorAge,
+            ConfigProblem::BeyondCeiling
+        )))
+    );
 }

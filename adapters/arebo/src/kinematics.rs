@@ -167,6 +167,32 @@ pub fn joint_torques(q: ActuatedAngles, force: &Vector3<f64>) -> Vector3<f64> {
     )
 }
 
+/// θ4, θ5 [rad] that point z_R5 along `axis` (frame R0, any length) with
+/// the actuated joints at `q`: the inverse of [`frame_5`]'s z axis. In
+/// frame R3, z_R5 = (cos a sin b, sin a sin b, cos b) with a = θ4 − π/2,
+/// b = θ5 + π/2, b ∈ [0, π]. `None` for a zero or non-finite axis; along
+/// z_R3 (b = 0 or π) θ4 is undefined and 0 is taken.
+pub fn distal_angles(q: ActuatedAngles, axis: &Vector3<f64>) -> Option<[f64; 2]> {
+    let norm = axis.norm();
+    if !(norm.is_finite() && norm > 0.0) {
+        return None;
+    }
+    let mut rotation = Rotation3::identity();
+    for (row, theta) in DH_ROWS.iter().zip(q.0.iter()) {
+        let (a, alpha, offset) = *row;
+        rotation *= dh(theta + offset, 0.0, a, alpha).0;
+    }
+    let v = rotation.inverse() * (axis / norm);
+    let b = libm::acos(v.z.clamp(-1.0, 1.0));
+    let a = if libm::hypot(v.x, v.y) > AXIS_SINGULARITY {
+        libm::atan2(v.y, v.x)
+    } else {
+        0.0
+    };
+    let half_pi = core::f64::consts::FRAC_PI_2;
+    Some([wrap(a + half_pi), b - half_pi])
+}
+
 /// Wraps an angle into [−π, π].
 pub fn wrap(angle: f64) -> f64 {
     let tau = 2.0 * core::f64::consts::PI;
@@ -222,6 +248,22 @@ pub fn inverse(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    proptest::proptest! {
+        /// θ4, θ5 from [`distal_angles`] point z_R5 along the axis asked for.
+        #[test]
+        fn distal_angles_point_z5_along_the_axis(
+            t1 in -1.5..1.5f64, t2 in -0.8..1.2f64, t3 in 0.3..2.5f64,
+            x in -1.0..1.0f64, y in -1.0..1.0f64, z in -1.0..1.0f64,
+        ) {
+            let axis = Vector3::new(x, y, z);
+            proptest::prop_assume!(axis.norm() > 1e-3);
+            let q = ActuatedAngles([t1, t2, t3]);
+            let [t4, t5] = distal_angles(q, &axis).unwrap();
+            let (r, _) = frame_5(&JointAngles([t1, t2, t3, t4, t5, 0.0]));
+            proptest::prop_assert!((r * Vector3::z() - axis.normalize()).norm() < 1e-9);
+        }
+    }
     use proptest::prelude::*;
 
     fn angle() -> impl Strategy<Value = f64> {

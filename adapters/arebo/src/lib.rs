@@ -20,7 +20,9 @@
 //!                    protocol (framing, streaming decoder)
 //! ```
 //! With `std`: [`link`] (the serial session and a simulated device on a
-//! pseudo-terminal) and [`recording`] (calibration over a session).
+//! pseudo-terminal), [`recording`] (calibration over a session) and
+//! [`robot`] (AREBO as the robot of a `limb-session` session: the kernel's
+//! Grasp → Estimate → Validated → Manipulate loop).
 //!
 //! Frames: R0 is the robot base (z up, gravity −z); H0 is the human base
 //! frame, R0 rotated about x_R0 by ψx and translated to the shoulder centre.
@@ -35,6 +37,8 @@
 pub mod calibration;
 pub mod control;
 pub mod encoder;
+#[cfg(feature = "std")]
+pub mod held_arm;
 pub mod human;
 pub mod kinematics;
 #[cfg(feature = "std")]
@@ -42,6 +46,8 @@ pub mod link;
 pub mod protocol;
 #[cfg(feature = "std")]
 pub mod recording;
+#[cfg(feature = "std")]
+pub mod robot;
 pub mod safety;
 #[cfg(feature = "std")]
 pub mod sim;

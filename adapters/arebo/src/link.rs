@@ -20,15 +20,18 @@
 //! [`DeviceFault`] injects garbage, stalls, an unplug or a lost heartbeat.
 
 use crate::control::GravityParameters;
-use crate::encoder::actuated_angles;
+use crate::encoder::{actuated_angles, Encoder};
+use crate::held_arm::HeldArm;
 use crate::human::ShoulderAngles;
-use crate::kinematics;
+use crate::kinematics::{self, ElbowBranch, ShoulderBranch};
 use crate::protocol::{
     status_byte, status_control, Command, ControlType, Decoder, Telemetry, COMMAND_HEADER,
     ERROR_HEARTBEAT, TELEMETRY_HEADER,
 };
 use crate::safety::{self, AreboLimit, AreboViolation, SafetyLimits};
 use crate::sim::{self, RobotSensor, Setup, ShoulderJointModel};
+use limb_session::clock::AlignedClock;
+use nalgebra::Vector3;
 use serialport::{SerialPort, TTYPort};
 use std::io::{ErrorKind, Read, Write};
 use std::path::{Path, PathBuf};
@@ -116,13 +119,19 @@ pub enum SessionState {
 /// Heartbeat period [s] (the device gives up after about 1 s).
 pub const HEARTBEAT_PERIOD: f64 = 0.1;
 
-/// One decoded stream frame with its host receive time.
+/// One decoded stream frame with its time on the session clock.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Received {
     /// The frame.
     pub telemetry: Telemetry,
-    /// Host time when the read returned it [s, session clock].
+    /// When the device measured it [s, session clock]: the read's host
+    /// time less the frame's age on the device's own clock (its run time,
+    /// aligned as `limb_session::clock::AlignedClock` aligns a robot's
+    /// stamps). A frame read from a backlog, or one whose run time stopped,
+    /// is as old as the device's clock says, not as fresh as the read.
     pub time: f64,
+    /// When the host read it [s, session clock].
+    pub read_at: f64,
 }
 
 /// The host end of the link.
@@ -136,6 +145,12 @@ pub struct Session {
     state: SessionState,
     /// Frames with a valid checksum whose payload is not a stream frame.
     unparsed: u32,
+    /// The device's run time against the session clock.
+    clock: AlignedClock,
+    /// Packet number of the last stream frame.
+    last_packet: Option<u16>,
+    /// Stream frames whose packet number did not follow the last one's.
+    packet_gaps: u32,
 }
 
 impl Session {
@@ -156,6 +171,9 @@ impl Session {
             limits,
             state: SessionState::Running,
             unparsed: 0,
+            clock: AlignedClock::default(),
+            last_packet: None,
+            packet_gaps: 0,
         };
         session.send(Command::StartStream)?;
         Ok(session)
@@ -180,6 +198,31 @@ impl Session {
     /// (dropped, counted here).
     pub fn unparsed_frames(&self) -> u32 {
         self.unparsed
+    }
+
+    /// Stream frames whose packet number did not follow the last one's
+    /// (lost, repeated or reordered frames; a reset packet number once).
+    pub fn packet_gaps(&self) -> u32 {
+        self.packet_gaps
+    }
+
+    /// The frame's time on the session clock (see [`Received::time`]),
+    /// counting a gap in its packet number.
+    fn received(&mut self, telemetry: Telemetry, read_at: f64) -> Received {
+        if self
+            .last_packet
+            .is_some_and(|last| telemetry.packet != last.wrapping_add(1))
+        {
+            self.packet_gaps = self.packet_gaps.saturating_add(1);
+        }
+        self.last_packet = Some(telemetry.packet);
+        let stamp = f64::from(telemetry.run_time_ms) * 1e-3;
+        let device_now = self.clock.frame(stamp, read_at);
+        Received {
+            telemetry,
+            time: read_at - (device_now - stamp),
+            read_at,
+        }
     }
 
     /// Sends a command. A write that fails latches the safe stop (and tries
@@ -240,8 +283,10 @@ impl Session {
     }
 
     /// One poll: heartbeat when due, read what arrived (waits at most
-    /// [`READ_TIMEOUT`]), decode, check freshness. Returns the frames
-    /// decoded, stamped with the host time of the read.
+    /// [`READ_TIMEOUT`]), decode, check freshness: every frame's age on the
+    /// device's clock (a backlog read after a host stall, or a device clock
+    /// that stopped, is stale), and the time since the newest. Returns the
+    /// frames decoded, stamped with their time on the session clock.
     pub fn poll(&mut self) -> Vec<Received> {
         let now = self.now();
         if self
@@ -267,18 +312,21 @@ impl Session {
                         continue;
                     };
                     match Telemetry::parse(&payload) {
-                        Some(telemetry) => frames.push(Received {
-                            telemetry,
-                            time: now,
-                        }),
+                        Some(telemetry) => {
+                            let frame = self.received(telemetry, now);
+                            frames.push(frame);
+                        }
                         None => self.unparsed = self.unparsed.saturating_add(1),
                     }
                 }
             }
             Err(_) => self.stop(StopCause::PortLost),
         }
-        if !frames.is_empty() {
-            self.last_frame = Some(now);
+        for frame in &frames {
+            if let Err(violation) = safety::check_fresh(Some(frame.time), now, &self.limits) {
+                self.stop(StopCause::Violation(violation));
+            }
+            self.last_frame = Some(self.last_frame.map_or(frame.time, |t| t.max(frame.time)));
         }
         if let Err(violation) = safety::check_fresh(self.last_frame, now, &self.limits) {
             // Before the first frame, allow one stale period for start-up.
@@ -306,6 +354,8 @@ pub enum DeviceFault {
     /// Behaves as if the host's heartbeats stopped arriving: reports
     /// [`ERROR_HEARTBEAT`] and stops applying the torque target.
     HeartbeatLost = 4,
+    /// Keeps streaming, its run time stopped (a hung firmware clock).
+    FrozenClock = 5,
 }
 
 /// Shared switch for [`DeviceFault`].
@@ -324,6 +374,7 @@ impl FaultSwitch {
             2 => DeviceFault::Stall,
             3 => DeviceFault::Unplug,
             4 => DeviceFault::HeartbeatLost,
+            5 => DeviceFault::FrozenClock,
             _ => DeviceFault::None,
         }
     }
@@ -342,6 +393,115 @@ pub struct DeviceRecord {
 
 /// A trajectory the device's SJM follows (simulated time [s]).
 pub type DeviceTrajectory = Box<dyn Fn(f64) -> (ShoulderAngles, [f64; 2]) + Send>;
+
+/// What the simulated device's cuff holds.
+pub trait Person: Send {
+    /// Advances one stream period with the robot pushing the cuff with
+    /// `force` [N, R0]; `moved`: periods since the person started.
+    fn advance(&mut self, moved: usize, force: &Vector3<f64>);
+    /// The cuff centre [m, R0].
+    fn cuff(&self) -> Vector3<f64>;
+    /// The cuff's roll axis z_R5 [R0], when the person turns it (θ4, θ5
+    /// then follow it; otherwise they read 0).
+    fn cuff_axis(&self) -> Option<Vector3<f64>> {
+        None
+    }
+    /// The person's own angles for the record (the SJM's φ; the held
+    /// arm's shoulder elevation q1 as `flexion`, elbow flexion q2 as
+    /// `abduction`).
+    fn angles(&self) -> ShoulderAngles;
+}
+
+/// The shoulder joint model following a trajectory from the person's
+/// start (the paper's experiments).
+struct Shoulder {
+    sjm: ShoulderJointModel,
+    trajectory: DeviceTrajectory,
+}
+
+impl Person for Shoulder {
+    fn advance(&mut self, moved: usize, force: &Vector3<f64>) {
+        for k in 0..5 {
+            let t = (moved * 5 + k) as f64 * sim::PHYSICS_STEP;
+            self.sjm.step((self.trajectory)(t), force);
+        }
+    }
+
+    fn cuff(&self) -> Vector3<f64> {
+        self.sjm.endpoint()
+    }
+
+    fn angles(&self) -> ShoulderAngles {
+        self.sjm.angles()
+    }
+}
+
+/// The kernel's reference arm held at the wrist ([`HeldArm`]).
+impl Person for HeldArm {
+    fn advance(&mut self, _: usize, force: &Vector3<f64>) {
+        HeldArm::advance(self, force, sim::SAMPLE_PERIOD);
+    }
+
+    fn cuff(&self) -> Vector3<f64> {
+        HeldArm::cuff(self)
+    }
+
+    fn cuff_axis(&self) -> Option<Vector3<f64>> {
+        Some(self.forearm())
+    }
+
+    fn angles(&self) -> ShoulderAngles {
+        let [q1, q2] = self.joints();
+        ShoulderAngles {
+            flexion: q1,
+            abduction: q2,
+        }
+    }
+}
+
+/// How the simulated device paces its stream periods.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DevicePacing {
+    /// A sleep of this much real time after each period.
+    Wall(Duration),
+    /// In torque mode, each period waits for the host's target answering
+    /// the last frame (at most [`LOCK_STEP_TIMEOUT`]): a simulation whose
+    /// loop closes however loaded the machine is, as fast as the host
+    /// answers. Other control types (and a device not streaming) take one
+    /// sample period of real time per period.
+    LockStep,
+}
+
+/// Longest a lock-stepped device waits for the host's target.
+pub const LOCK_STEP_TIMEOUT: Duration = Duration::from_secs(1);
+
+/// What the host's commands set on the simulated device.
+struct Inputs {
+    streaming: bool,
+    control: ControlType,
+    target: [f32; 3],
+    packet: u16,
+    last_heartbeat: Instant,
+}
+
+impl Inputs {
+    /// Applies `command`; true when it was a control target.
+    fn apply(&mut self, command: Command) -> bool {
+        match command {
+            Command::StartStream => self.streaming = true,
+            Command::StopStream => self.streaming = false,
+            Command::Heartbeat => self.last_heartbeat = Instant::now(),
+            Command::SetControlType(kind) => self.control = kind,
+            Command::SetControlTarget(torques) => {
+                self.target = torques;
+                return true;
+            }
+            Command::ResetPacketNumber => self.packet = 0,
+            Command::GetVersion | Command::Calibrate | Command::SetDiagnostics(_) => {}
+        }
+        false
+    }
+}
 
 /// Longest the simulated device waits to write a frame into a full pty.
 const DEVICE_WRITE_TIMEOUT: Duration = Duration::from_secs(30);
@@ -368,6 +528,46 @@ pub fn spawn_device(
     trajectory: DeviceTrajectory,
     frames: usize,
     wall_period: Duration,
+    fault: FaultSwitch,
+) -> Result<JoinHandle<DeviceRecord>, LinkError> {
+    let person = Shoulder {
+        sjm: ShoulderJointModel::new(setup, trajectory(0.0).0),
+        trajectory,
+    };
+    let pacing = DevicePacing::Wall(wall_period);
+    spawn_device_holding(device, setup, Box::new(person), frames, pacing, fault)
+}
+
+/// [`spawn_device_holding`] the kernel's reference arm
+/// ([`HeldArm::reference`]) with no backlash.
+///
+/// # Errors
+/// [`LinkError`] when the port cannot be cloned.
+pub fn spawn_held_arm(
+    device: TTYPort,
+    frames: usize,
+    pacing: DevicePacing,
+) -> Result<JoinHandle<DeviceRecord>, LinkError> {
+    let setup = Setup {
+        backlash: [0.0; 3],
+        ..Setup::default()
+    };
+    let arm = Box::new(HeldArm::reference());
+    spawn_device_holding(device, setup, arm, frames, pacing, FaultSwitch::default())
+}
+
+/// [`spawn_device`] with the cuff on `person` (e.g. the kernel's reference
+/// arm held at the wrist, [`HeldArm`]), which starts moving at the first
+/// streamed frame in which the motors are on, paced by `pacing`.
+///
+/// # Errors
+/// [`LinkError`] when the port cannot be cloned.
+pub fn spawn_device_holding(
+    device: TTYPort,
+    setup: Setup,
+    mut person: Box<dyn Person>,
+    frames: usize,
+    pacing: DevicePacing,
     fault: FaultSwitch,
 ) -> Result<JoinHandle<DeviceRecord>, LinkError> {
     let mut writer = device.try_clone_native()?;
@@ -398,40 +598,54 @@ pub fn spawn_device(
         }
     });
     Ok(std::thread::spawn(move || {
-        let mut sjm = ShoulderJointModel::new(setup, trajectory(0.0).0);
         let mut sensor = RobotSensor::new(setup.backlash);
         let mut record = DeviceRecord {
             truth: Vec::new(),
             control: Vec::new(),
             frames: 0,
         };
-        let (mut streaming, mut control, mut target) = (false, ControlType::Off, [0f32; 3]);
-        let mut packet = 0u16;
-        let mut last_heartbeat = Instant::now();
+        let mut inputs = Inputs {
+            streaming: false,
+            control: ControlType::Off,
+            target: [0f32; 3],
+            packet: 0,
+            last_heartbeat: Instant::now(),
+        };
+        let mut awaiting_target = false;
         let mut counts = [0i32; 5];
         let mut garbage = sim::SplitMix64::new(7);
         // The device's clock runs while it streams; the person follows the
         // trajectory from when the robot first carries its own weight
         // (told to start once it is gravity compensated).
         let mut simulated = 0usize;
-        let mut person: Option<usize> = None;
+        let mut run_time = 0.0;
+        let mut started: Option<usize> = None;
         // Idle (not streaming) periods count too, so a device nobody
         // starts still ends.
         for _ in 0..frames.saturating_mul(2) {
             if record.frames >= frames {
                 break;
             }
-            while let Ok(command) = received.try_recv() {
-                match command {
-                    Command::StartStream => streaming = true,
-                    Command::StopStream => streaming = false,
-                    Command::Heartbeat => last_heartbeat = Instant::now(),
-                    Command::SetControlType(kind) => control = kind,
-                    Command::SetControlTarget(torques) => target = torques,
-                    Command::ResetPacketNumber => packet = 0,
-                    Command::GetVersion | Command::Calibrate | Command::SetDiagnostics(_) => {}
+            if awaiting_target {
+                let deadline = Instant::now() + LOCK_STEP_TIMEOUT;
+                while let Some(left) = deadline.checked_duration_since(Instant::now()) {
+                    match received.recv_timeout(left) {
+                        Ok(command) if inputs.apply(command) => break,
+                        Ok(_) => {}
+                        Err(_) => break,
+                    }
                 }
             }
+            while let Ok(command) = received.try_recv() {
+                inputs.apply(command);
+            }
+            let Inputs {
+                streaming,
+                control,
+                target,
+                last_heartbeat,
+                ..
+            } = inputs;
             let fault = fault.get();
             let heartbeat_missing = last_heartbeat.elapsed() > Duration::from_secs(1)
                 || fault == DeviceFault::HeartbeatLost;
@@ -451,17 +665,25 @@ pub fn spawn_device(
             let force = crate::control::interaction_force(q, &applied).unwrap_or_default();
             if streaming {
                 if control != ControlType::Off {
-                    person.get_or_insert(simulated);
+                    started.get_or_insert(simulated);
                 }
-                let moved = person.map_or(0, |started| simulated - started);
-                for k in 0..5 {
-                    let t = (moved * 5 + k) as f64 * sim::PHYSICS_STEP;
-                    sjm.step(trajectory(t), &force);
-                }
+                let moved = started.map_or(0, |started| simulated - started);
+                person.advance(moved, &force);
                 simulated += 1;
             }
-            if let Some(c) = sensor.read(&sjm.endpoint()) {
+            let cuff = person.cuff();
+            if let Some(c) = sensor.read(&cuff) {
                 counts = c;
+            }
+            // θ4, θ5 (joint-side encoders) follow the cuff's roll axis
+            // from the true link angles.
+            let distal = person.cuff_axis().and_then(|axis| {
+                let link = kinematics::inverse(&cuff, ShoulderBranch::Front, ElbowBranch::Negative);
+                link.ok().and_then(|q| kinematics::distal_angles(q, &axis))
+            });
+            if let Some([t4, t5]) = distal {
+                counts[3] = Encoder::Distal.counts(t4);
+                counts[4] = Encoder::Distal.counts(t5);
             }
             let q = actuated_angles(&counts);
             let gravity = GravityParameters::ASSUMED.torques(q);
@@ -474,7 +696,9 @@ pub fn spawn_device(
                 gravity
             };
             let sensed = held + interaction;
-            let run_time = simulated as f64 * sim::SAMPLE_PERIOD * 1000.0;
+            if fault != DeviceFault::FrozenClock {
+                run_time = simulated as f64 * sim::SAMPLE_PERIOD * 1000.0;
+            }
             let frame = Telemetry {
                 status: status_byte(streaming, control),
                 error: if heartbeat_missing {
@@ -482,13 +706,13 @@ pub fn spawn_device(
                 } else {
                     0
                 },
-                packet,
+                packet: inputs.packet,
                 run_time_ms: run_time as u32,
                 counts,
                 torques: [sensed.x as f32, sensed.y as f32, sensed.z as f32],
                 commanded: [held.x as f32, held.y as f32, held.z as f32],
             };
-            packet = packet.wrapping_add(1);
+            inputs.packet = inputs.packet.wrapping_add(1);
             if fault == DeviceFault::Unplug {
                 break;
             }
@@ -506,11 +730,19 @@ pub fn spawn_device(
                 if writer.write_all(&bytes).is_err() {
                     break;
                 }
-                record.truth.push(sjm.angles());
+                record.truth.push(person.angles());
                 record.control.push(control);
                 record.frames += 1;
             }
-            std::thread::sleep(wall_period);
+            match pacing {
+                DevicePacing::Wall(period) => std::thread::sleep(period),
+                DevicePacing::LockStep => {
+                    awaiting_target = streaming && control == ControlType::Torque;
+                    if !awaiting_target {
+                        std::thread::sleep(Duration::from_secs_f64(sim::SAMPLE_PERIOD));
+                    }
+                }
+            }
         }
         record
     }))

@@ -225,7 +225,9 @@ impl Command {
         frame(COMMAND_HEADER, &payload).unwrap_or_default()
     }
 
-    /// Parses a command payload; `None` for unknown codes or bad lengths.
+    /// Parses a command payload; `None` for unknown codes, bad lengths or
+    /// arguments outside their codes (each command has one spelling: what
+    /// is accepted re-encodes to the same bytes).
     pub fn parse(payload: &[u8]) -> Option<Self> {
         let (&code, args) = payload.split_first()?;
         let command = match (code, args) {
@@ -237,7 +239,8 @@ impl Command {
             (0x05, a) if a.len() == 12 => {
                 Command::SetControlTarget([f32_at(a, 0)?, f32_at(a, 4)?, f32_at(a, 8)?])
             }
-            (0x06, [on]) => Command::SetDiagnostics(*on != 0),
+            (0x06, [0]) => Command::SetDiagnostics(false),
+            (0x06, [1]) => Command::SetDiagnostics(true),
             (0x07, []) => Command::ResetPacketNumber,
             (0x80, []) => Command::Heartbeat,
             _ => return None,
@@ -432,6 +435,27 @@ mod tests {
                 let payload = c.encode().iter().filter_map(|b| decoder.push(*b)).next().unwrap();
                 prop_assert_eq!(Command::parse(&payload), Some(c));
             }
+        }
+    }
+
+    /// Found by the `arebo_stream` fuzz target: set-diagnostics took any
+    /// nonzero argument as "on", so `aa aa 03 06 a3 00` was accepted as the
+    /// command whose only spelling is `aa aa 03 06 01 5e`.
+    #[test]
+    fn set_diagnostics_takes_only_0_or_1() {
+        let mut decoder = Decoder::new(COMMAND_HEADER);
+        let payloads: std::vec::Vec<Payload> = [0xAA, 0xAA, 0x03, 0x06, 0xA3, 0x00]
+            .iter()
+            .filter_map(|b| decoder.push(*b))
+            .collect();
+        assert_eq!(payloads.len(), 1, "the frame itself is well formed");
+        assert_eq!(Command::parse(&payloads[0]), None);
+        for on in [false, true] {
+            let framed = Command::SetDiagnostics(on).encode();
+            assert_eq!(
+                Command::parse(&framed[3..framed.len() - 1]),
+                Some(Command::SetDiagnostics(on))
+            );
         }
     }
 

@@ -98,6 +98,20 @@ impl Default for SafetyLimits {
     }
 }
 
+impl SafetyLimits {
+    /// The defaults without the link's own freshness bound: for a session
+    /// whose kernel judges the frames' age (`limb-session`, AREBO as a
+    /// robot). On the device's own clock (a lock-stepped simulation) the
+    /// host's time says nothing of a frame's age; a device that falls
+    /// silent ends the session at its duration.
+    pub fn judged_by_kernel() -> Self {
+        Self {
+            stale_after: f64::INFINITY,
+            ..Self::default()
+        }
+    }
+}
+
 fn at_most(limit: AreboLimit, value: f64, bound: f64) -> AreboVerdict {
     if value <= bound {
         Ok(())

@@ -11,6 +11,7 @@ use limb_arebo::recording::{self, Calibration, CalibrationSettings};
 use limb_arebo::safety::{AreboLimit, SafetyLimits};
 use limb_arebo::sim::{self, Setup};
 use limb_arebo::supervisor::{Output, Sample, Supervisor};
+use limb_kernel::config::Interval;
 use limb_kernel::monitor::Limit;
 use std::time::{Duration, Instant};
 
@@ -33,7 +34,10 @@ fn person() -> link::DeviceTrajectory {
 }
 
 /// A simulated device on a fresh pty streaming `frames` frames, 0.3 ms of
-/// wall time per 5 ms frame, and a host session on it.
+/// wall time per 5 ms frame, and a host session on it. The device's clock
+/// runs 17 times faster than real time, so a loaded host's late read of
+/// its backlog looks 17 times older on it: the session here judges
+/// freshness at 1 s (freshness is tested below, 1 ms per frame).
 fn device_and_session(
     setup: Setup,
     frames: usize,
@@ -49,7 +53,11 @@ fn device_and_session(
         faults,
     )
     .unwrap();
-    let session = Session::open(&pty.path, SafetyLimits::default()).unwrap();
+    let limits = SafetyLimits {
+        stale_after: 1.0,
+        ..SafetyLimits::default()
+    };
+    let session = Session::open(&pty.path, limits).unwrap();
     (device, session)
 }
 
@@ -125,7 +133,7 @@ fn calibration_and_tracking_over_the_pty() {
     assert!(backlash.3 < 1.0 && backlash.4 < 1.0);
 }
 
-/// Finding 7 of issue 18: when the device reports the host's heartbeat
+/// REQ-ADP-002: Finding 7 of issue 18: when the device reports the host's heartbeat
 /// missing (it has stopped assisting), the supervisor stops in the next
 /// frame, and the session commands the motors off.
 #[test]
@@ -144,10 +152,14 @@ fn a_device_that_stopped_assisting_stops_the_supervisor() {
         },
         GravityParameters::ASSUMED,
         // The device streams 17 times faster than real time: a loaded host
-        // processes its backlog late. Freshness is tested elsewhere; here
-        // only the device's bits may stop the supervisor.
+        // processes its backlog late, and by then the simulated person's
+        // accuracy motion has brushed the default −20° flexion bound (CI
+        // saw −20.6° under weight support). Freshness and joint limits are
+        // tested elsewhere (`safety.rs`); here only the device's bits may
+        // stop the supervisor.
         SafetyLimits {
             stale_after: 1.0,
+            flexion: Interval::new((-45f64).to_radians(), 150f64.to_radians()),
             ..SafetyLimits::default()
         },
         NOMINAL_BACKLASH,
@@ -346,4 +358,46 @@ fn frames_of_another_length_are_counted() {
         assert!(session.poll().is_empty());
     }
     assert_eq!(session.unparsed_frames(), 1);
+}
+
+/// REQ-ADP-002: The device's own clock judges freshness: after a 0.3 s host stall the
+/// backlog in the pty is as old as the device's run time says, and the
+/// session stops on stale data (not acting on it as fresh); a device whose
+/// run time stops while it keeps streaming ages its frames and stops the
+/// session the same way.
+#[test]
+fn a_backlog_after_a_host_stall_and_a_frozen_device_clock_are_stale() {
+    for frozen in [false, true] {
+        let pty = link::pseudo_terminal().unwrap();
+        let faults = FaultSwitch::default();
+        let motion = sim::accuracy_motion(3);
+        let device = link::spawn_device(
+            pty.device.try_clone_native().unwrap(),
+            Setup::default(),
+            Box::new(move |t| motion.at(t)),
+            4000,
+            Duration::from_millis(1),
+            faults.clone(),
+        )
+        .unwrap();
+        let mut session = Session::open(&pty.path, SafetyLimits::default()).unwrap();
+        assert!(poll_for(&mut session, 0.3) > 50);
+        assert_eq!(session.state(), SessionState::Running);
+        if frozen {
+            faults.set(DeviceFault::FrozenClock);
+        } else {
+            std::thread::sleep(Duration::from_millis(300));
+        }
+        poll_for(&mut session, 0.3);
+        match session.state() {
+            SessionState::SafeStop(StopCause::Violation(v)) => {
+                assert_eq!(v.limit, AreboLimit::Kernel(Limit::StaleSensor), "{v:?}");
+                assert!(v.value > 0.05, "{v:?}");
+            }
+            other => panic!("frozen clock {frozen}: {other:?}"),
+        }
+        faults.set(DeviceFault::Unplug);
+        drop(session);
+        device.join().unwrap();
+    }
 }

@@ -8,8 +8,8 @@
 //!
 //! `cargo run --release -p limb-kuka --example loop_latency -- [SECONDS] [VERSION] [joint|wrench]`
 
-use limb_kuka::kernel_controller::Overlay;
 use limb_kuka::loopback::run_reference_session;
+use limb_kuka::robot::Overlay;
 use limb_kuka::sim_controller::{Pacing, SimSettings};
 use limb_kuka::FriVersion;
 
@@ -33,7 +33,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let wall = started.elapsed().as_secs_f64();
     let stats = run.sim.stats();
     let latency = stats.latency();
-    let record = run.controller.record();
     println!(
         "FRI {version} {overlay:?}, {} cycles at 1 kHz in {wall:.1} s wall: round trip p50 {:.0} us, \
          p99 {:.0} us, max {:.0} us; missed {} (of which {} answered late); \
@@ -45,11 +44,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         stats.missed_cycles,
         stats.late_replies,
         stats.state_cycles[4],
-        run.controller.kernel().state().kind(),
-        record.steps,
-        record.events,
+        run.kernel.state().kind(),
+        run.outcome.steps,
+        run.events
+            .iter()
+            .map(limb_session::operator::describe)
+            .collect::<Vec<_>>(),
     );
-    if let Some(model) = record.model {
+    if let Some(model) = run.outcome.model {
         println!("model: {model:?}");
     }
     Ok(())

@@ -20,6 +20,9 @@
 //! | `idle` | session drops to IDLE, then re-enters from MONITORING_WAIT | — |
 //! | `garbage` | a random non-FRI datagram sent before each | — |
 //! | `wrong-crc` | 2.7 CRC corrupted (other versions: last byte flipped) | — |
+//! | `clock-back` | the robot's time stamp runs that many cycles behind | cycles (100) |
+//! | `clock-stall` | the robot's time stamp stays at the window's start | — |
+//! | `clock-repeat` | each time stamp sent on two cycles (the clock at half speed) | — |
 
 use std::fmt;
 use std::str::FromStr;
@@ -47,6 +50,12 @@ pub enum FaultKind {
     Garbage,
     /// Corrupt the 2.7 CRC (other versions: flip the last byte).
     WrongCrc,
+    /// Stamp the messages this many cycles behind the plant's time.
+    ClockBack(u32),
+    /// Keep stamping the time of the window's first cycle.
+    ClockStall,
+    /// Stamp each time on two cycles (the robot clock at half speed).
+    ClockRepeat,
 }
 
 /// A fault active over `cycles` cycles from cycle `start`.
@@ -97,6 +106,8 @@ pub struct ActiveFaults {
     pub garbage: bool,
     /// Corrupt the CRC.
     pub wrong_crc: bool,
+    /// How many cycles the time stamp lags the plant's time.
+    pub clock_lag: u64,
 }
 
 impl FaultSchedule {
@@ -126,6 +137,9 @@ impl FaultSchedule {
                 FaultKind::Idle => active.idle = true,
                 FaultKind::Garbage => active.garbage = true,
                 FaultKind::WrongCrc => active.wrong_crc = true,
+                FaultKind::ClockBack(cycles) => active.clock_lag = u64::from(cycles),
+                FaultKind::ClockStall => active.clock_lag = cycle - fault.start,
+                FaultKind::ClockRepeat => active.clock_lag = (cycle - fault.start).div_ceil(2),
             }
         }
         active
@@ -182,6 +196,9 @@ impl FromStr for ScheduledFault {
             "idle" => FaultKind::Idle,
             "garbage" => FaultKind::Garbage,
             "wrong-crc" => FaultKind::WrongCrc,
+            "clock-back" => FaultKind::ClockBack(number(100.0)?.min(1e9) as u32),
+            "clock-stall" => FaultKind::ClockStall,
+            "clock-repeat" => FaultKind::ClockRepeat,
             _ => return Err(error("unknown KIND")),
         };
         Ok(Self {
@@ -205,6 +222,9 @@ impl fmt::Display for ScheduledFault {
             FaultKind::Idle => ("idle", None),
             FaultKind::Garbage => ("garbage", None),
             FaultKind::WrongCrc => ("wrong-crc", None),
+            FaultKind::ClockBack(c) => ("clock-back", Some(f64::from(c))),
+            FaultKind::ClockStall => ("clock-stall", None),
+            FaultKind::ClockRepeat => ("clock-repeat", None),
         };
         write!(f, "{name}@{}:{}", self.start, self.cycles)?;
         match parameter {

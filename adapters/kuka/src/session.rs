@@ -221,26 +221,51 @@ impl ClientSession {
         }
     }
 
-    /// Handles one monitoring message received at `now` (s).
+    /// Handles one monitoring message received at `now` (s): [`Self::accept`],
+    /// the controller, [`Self::reply`].
     pub fn on_monitoring(
         &mut self,
         message: &FriMonitoringMessage,
         controller: &mut impl Controller,
         now: f64,
     ) -> SessionReply {
+        let sequence = self.accept(message);
+        if !sequence.is_handled() {
+            return SessionReply {
+                command: None,
+                fault: None,
+                sequence,
+            };
+        }
+        let intent = controller.on_monitoring(&Self::view(message), now);
+        self.reply(message, intent, sequence)
+    }
+
+    /// Checks the sequence counter of `message` and, when it is handled
+    /// (not a duplicate or a stale datagram), records it.
+    pub fn accept(&mut self, message: &FriMonitoringMessage) -> SequenceCheck {
         let sequence =
             SequenceCheck::classify(self.last_monitor_counter, message.header.sequence_counter);
+        if sequence.is_handled() {
+            self.last_monitor_counter = Some(message.header.sequence_counter);
+        }
+        sequence
+    }
+
+    /// The reply to an accepted `message` (its `sequence` check) carrying
+    /// `intent` where the state allows.
+    pub fn reply(
+        &mut self,
+        message: &FriMonitoringMessage,
+        intent: CommandIntent,
+        sequence: SequenceCheck,
+    ) -> SessionReply {
         let silent = |sequence| SessionReply {
             command: None,
             fault: None,
             sequence,
         };
-        if !sequence.is_handled() {
-            return silent(sequence);
-        }
-        self.last_monitor_counter = Some(message.header.sequence_counter);
         let view = Self::view(message);
-        let intent = controller.on_monitoring(&view, now);
         if view.session_state == SessionState::Idle {
             self.last_target = None;
             self.messages_since_reply = 0;

@@ -46,13 +46,13 @@ use nalgebra::Vector6;
 use crate::codec::{decode_command, encode_monitoring, EncodeError, MAX_DATAGRAM_BYTES};
 use crate::faults::{ActiveFaults, FaultSchedule};
 use crate::grasp_frame::GraspFrame;
-use crate::kernel_controller::Overlay;
 use crate::kinematics::{forward, inverse, joint_torque_from_wrench};
 use crate::messages::{
     ClientCommandMode, ConnectionInfo, ConnectionQuality, ControlMode, FriCommandMessage,
     FriMonitoringMessage, JointValues, MessageHeader, MessageIpoData, MessageMonitorData,
     OverlayType, RobotInfo, SessionState, TimeStamp, MONITORING_MESSAGE_ID,
 };
+use crate::robot::Overlay;
 use crate::session::JointVector;
 use crate::version::FriVersion;
 
@@ -672,7 +672,9 @@ impl SimController {
             joint_torque_from_wrench(&self.joints, &self.frame.wrench_to_base(measurement.wrench));
         self.counter = self.counter.wrapping_add(faults.counter_jump);
         let counter = self.counter;
-        let message = self.monitoring_message(quality, &torque, measurement.time);
+        // A robot clock fault: the stamp lags the plant's time.
+        let stamp = measurement.time - faults.clock_lag as f64 * self.settings.period();
+        let message = self.monitoring_message(quality, &torque, stamp);
         self.counter = self.counter.wrapping_add(1);
         let datagram = encode_monitoring(&message, self.settings.version)?;
         let (datagrams, delivered) = self.inject(&faults, datagram);

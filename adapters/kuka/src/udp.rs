@@ -11,9 +11,74 @@ use std::time::{Duration, Instant};
 use crate::codec::{
     decode_monitoring, encode_command, DecodeError, EncodeError, MAX_DATAGRAM_BYTES,
 };
+use crate::messages::FriMonitoringMessage;
 use crate::messages::SessionState;
-use crate::session::{ClientSession, Controller, SequenceCheck, SessionFault};
+use crate::session::{
+    ClientSession, CommandIntent, Controller, MonitoringView, SequenceCheck, SessionFault,
+};
 use crate::version::FriVersion;
+
+/// The client's receive timeout: a quarter of the kernel's default sensor
+/// age limit (20 ms), so a silent link reaches the watchdog in time.
+pub const CLIENT_RECEIVE_TIMEOUT: Duration = Duration::from_millis(5);
+/// The client's receive timeout against an unpaced controller: there the
+/// robot's clock is the plant's, and silence is seen as a gap between time
+/// stamps (the session loop, `limb_session::run`); wall-clock stalls of a loaded
+/// machine are not link silence.
+pub const UNPACED_CLIENT_RECEIVE_TIMEOUT: Duration = Duration::from_millis(500);
+/// Largest joint-target change per reply of the loop [rad] (2 rad/s at
+/// 1 kHz; the kernel's 0.15 m/s speed limit needs well under 1 rad/s).
+pub const MAX_JOINT_STEP: f64 = 0.002;
+
+/// Cycle counts seen by the client.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ClientCounts {
+    /// Monitoring messages handled.
+    pub handled: u64,
+    /// Commands sent.
+    pub answered: u64,
+    /// Datagrams rejected by the decoder (garbage, wrong CRC).
+    pub rejected: u64,
+    /// Receive timeouts.
+    pub timeouts: u64,
+    /// Duplicates dropped.
+    pub duplicates: u64,
+    /// Older (reordered, delayed) datagrams dropped.
+    pub stale_datagrams: u64,
+    /// Gaps in the monitor's counter (messages handled after a gap).
+    pub gaps: u64,
+    /// Counter resynchronisations.
+    pub resynchronisations: u64,
+    /// Cycles with a session fault.
+    pub session_faults: u64,
+}
+
+impl ClientCounts {
+    /// Counts one cycle's outcome.
+    pub fn tally(&mut self, outcome: &CycleOutcome) {
+        match outcome {
+            CycleOutcome::Handled {
+                answered,
+                fault,
+                sequence,
+                ..
+            } => {
+                self.answered += u64::from(*answered);
+                self.session_faults += u64::from(fault.is_some());
+                match sequence {
+                    SequenceCheck::Duplicate => self.duplicates += 1,
+                    SequenceCheck::Stale { .. } => self.stale_datagrams += 1,
+                    SequenceCheck::Gap { .. } => self.gaps += 1,
+                    SequenceCheck::Resynchronised => self.resynchronisations += 1,
+                    SequenceCheck::First | SequenceCheck::InOrder => {}
+                }
+                self.handled += u64::from(sequence.is_handled());
+            }
+            CycleOutcome::Rejected(_) => self.rejected += 1,
+            CycleOutcome::Stale => self.timeouts += 1,
+        }
+    }
+}
 
 /// A failure of the client's own I/O or encoding.
 #[derive(Debug, thiserror::Error)]
@@ -50,6 +115,25 @@ pub enum CycleOutcome {
     Stale,
 }
 
+/// What [`FriClient::receive`] got.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Receipt {
+    /// A monitoring message to handle: answer it with
+    /// [`FriClient::answer`].
+    Monitoring(MonitoringView),
+    /// Nothing to handle; the cycle ended so (a dropped duplicate or stale
+    /// datagram, a rejected datagram, no datagram in time).
+    Done(CycleOutcome),
+}
+
+/// A monitoring message waiting for its answer.
+#[derive(Debug, Clone)]
+struct Pending {
+    message: FriMonitoringMessage,
+    source: SocketAddr,
+    sequence: SequenceCheck,
+}
+
 /// An FRI client bound to one UDP socket.
 #[derive(Debug)]
 pub struct FriClient {
@@ -60,6 +144,7 @@ pub struct FriClient {
     last_receive: Instant,
     receive_timeout: Duration,
     buffer: [u8; MAX_DATAGRAM_BYTES + 1],
+    pending: Option<Pending>,
 }
 
 impl FriClient {
@@ -86,6 +171,7 @@ impl FriClient {
             last_receive: now,
             receive_timeout,
             buffer: [0; MAX_DATAGRAM_BYTES + 1],
+            pending: None,
         })
     }
 
@@ -106,6 +192,25 @@ impl FriClient {
         &mut self,
         controller: &mut impl Controller,
     ) -> Result<CycleOutcome, ClientError> {
+        match self.receive()? {
+            Receipt::Monitoring(view) => {
+                let intent = controller.on_monitoring(&view, self.received_at());
+                self.answer(intent)
+            }
+            Receipt::Done(outcome) => {
+                if let Some(silent_for) = self.silence() {
+                    controller.on_link_stale(silent_for, self.clock());
+                }
+                Ok(outcome)
+            }
+        }
+    }
+
+    /// Waits at most the receive timeout for a datagram and checks it.
+    ///
+    /// # Errors
+    /// [`ClientError::Io`] on socket failure.
+    pub fn receive(&mut self) -> Result<Receipt, ClientError> {
         let (length, source) = match self.socket.recv_from(&mut self.buffer) {
             Ok(received) => received,
             Err(error)
@@ -114,54 +219,74 @@ impl FriClient {
                     std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
                 ) =>
             {
-                self.tell_if_stale(controller, Instant::now());
-                return Ok(CycleOutcome::Stale);
+                return Ok(Receipt::Done(CycleOutcome::Stale));
             }
             Err(error) => return Err(error.into()),
         };
         let datagram = self.buffer.get(..length).unwrap_or_default();
         let message = match decode_monitoring(datagram, self.version) {
             Ok(message) => message,
-            Err(error) => {
-                self.tell_if_stale(controller, Instant::now());
-                return Ok(CycleOutcome::Rejected(error));
-            }
+            Err(error) => return Ok(Receipt::Done(CycleOutcome::Rejected(error))),
         };
-        let now = Instant::now();
-        let reply = self.session.on_monitoring(
-            &message,
-            controller,
-            now.duration_since(self.start).as_secs_f64(),
-        );
-        if reply.sequence.is_handled() {
-            self.last_receive = now;
-        } else {
-            self.tell_if_stale(controller, now);
+        let sequence = self.session.accept(&message);
+        let view = ClientSession::view(&message);
+        if !sequence.is_handled() {
+            return Ok(Receipt::Done(CycleOutcome::Handled {
+                state: view.session_state,
+                answered: false,
+                fault: None,
+                sequence,
+            }));
         }
-        let state = ClientSession::view(&message).session_state;
+        self.last_receive = Instant::now();
+        self.pending = Some(Pending {
+            message,
+            source,
+            sequence,
+        });
+        Ok(Receipt::Monitoring(view))
+    }
+
+    /// Answers the message [`Self::receive`] returned with `intent` (where
+    /// its state allows a command); without one, a [`CycleOutcome::Stale`].
+    ///
+    /// # Errors
+    /// [`ClientError`] on socket or encode failure.
+    pub fn answer(&mut self, intent: CommandIntent) -> Result<CycleOutcome, ClientError> {
+        let Some(pending) = self.pending.take() else {
+            return Ok(CycleOutcome::Stale);
+        };
+        let reply = self
+            .session
+            .reply(&pending.message, intent, pending.sequence);
         let answered = reply.command.is_some();
         if let Some(command) = reply.command {
             let bytes = encode_command(&command, self.version)?;
-            self.socket.send_to(&bytes, source)?;
+            self.socket.send_to(&bytes, pending.source)?;
         }
         Ok(CycleOutcome::Handled {
-            state,
+            state: ClientSession::view(&pending.message).session_state,
             answered,
             fault: reply.fault,
             sequence: reply.sequence,
         })
     }
 
-    /// Tells the controller the link is stale when no monitoring message
-    /// was handled for a receive timeout or longer (a stream of garbage,
-    /// duplicates or stale datagrams does not keep the link alive).
-    fn tell_if_stale(&self, controller: &mut impl Controller, now: Instant) {
-        let silent_for = now.duration_since(self.last_receive);
-        if silent_for >= self.receive_timeout {
-            controller.on_link_stale(
-                silent_for.as_secs_f64(),
-                now.duration_since(self.start).as_secs_f64(),
-            );
-        }
+    /// The client's clock: seconds since it was bound.
+    pub fn clock(&self) -> f64 {
+        self.start.elapsed().as_secs_f64()
+    }
+
+    /// When the last handled monitoring message arrived, on [`Self::clock`].
+    pub fn received_at(&self) -> f64 {
+        self.last_receive.duration_since(self.start).as_secs_f64()
+    }
+
+    /// How long no monitoring message was handled [s], when that is a
+    /// receive timeout or longer (a stream of garbage, duplicates or stale
+    /// datagrams does not keep the link alive).
+    pub fn silence(&self) -> Option<f64> {
+        let silent_for = self.last_receive.elapsed();
+        (silent_for >= self.receive_timeout).then_some(silent_for.as_secs_f64())
     }
 }

@@ -5,26 +5,25 @@
 
 use limb_kernel::StateKind;
 use limb_kuka::faults::parse_schedule;
-use limb_kuka::kernel_controller::Overlay;
-use limb_kuka::loopback::{run_reference_session, LoopbackRun, MAX_JOINT_STEP};
+use limb_kuka::loopback::{run_reference_session, LoopbackRun};
 use limb_kuka::messages::SessionState;
+use limb_kuka::robot::Overlay;
 use limb_kuka::sim_controller::SimSettings;
+use limb_kuka::udp::MAX_JOINT_STEP;
 use limb_kuka::FriVersion;
+use limb_session::Operator;
 use std::sync::Mutex;
 
 /// One loop at a time, to keep the suite's load on two cores modest.
 static SERIAL: Mutex<()> = Mutex::new(());
 
-fn run(version: FriVersion, faults: &str, cycles: u64) -> LoopbackRun {
+type Run = LoopbackRun<Operator>;
+
+fn run(version: FriVersion, faults: &str, cycles: u64) -> Run {
     run_with_overlay(version, Overlay::JointPosition, faults, cycles)
 }
 
-fn run_with_overlay(
-    version: FriVersion,
-    overlay: Overlay,
-    faults: &str,
-    cycles: u64,
-) -> LoopbackRun {
+fn run_with_overlay(version: FriVersion, overlay: Overlay, faults: &str, cycles: u64) -> Run {
     let _serial = SERIAL
         .lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
@@ -42,27 +41,23 @@ fn run_with_overlay(
         stats.stray_replies,
         stats.datagrams_dropped,
         stats.max_entry_jump,
-        run.client,
-        run.controller.record().events
+        run.robot.record().client,
+        run.events
     );
     assert_eq!(stats.non_finite_replies, 0, "NaN on the wire");
     run
 }
 
-fn kernel_state(run: &LoopbackRun) -> StateKind {
-    run.controller.kernel().state().kind()
+fn kernel_state(run: &Run) -> StateKind {
+    run.kernel.state().kind()
 }
 
-fn stopped_because(run: &LoopbackRun, cause: &str) -> bool {
-    run.controller
-        .record()
-        .events
-        .iter()
-        .any(|(_, what)| what.contains("→ SafeStop") && what.contains(cause))
+fn stopped_because(run: &Run, cause: &str) -> bool {
+    run.stopped_because(cause)
 }
 
 /// Still estimating, never aborted, one entry into commanding.
-fn assert_rides_through(run: &LoopbackRun) {
+fn assert_rides_through(run: &Run) {
     assert_eq!(kernel_state(run), StateKind::Estimate);
     assert_eq!(run.sim.stats().overlay_aborts, 0);
     assert_eq!(run.sim.stats().commanding_entries, 1);
@@ -71,7 +66,7 @@ fn assert_rides_through(run: &LoopbackRun) {
 
 /// Overlay aborted and re-entered from the IPO position without a jump;
 /// the kernel stopped because the robot stopped following mid-motion.
-fn assert_stopped_and_reentered(run: &LoopbackRun, cause: &str) {
+fn assert_stopped_and_reentered(run: &Run, cause: &str) {
     assert_eq!(kernel_state(run), StateKind::SafeStop);
     assert!(stopped_because(run, cause), "no stop with {cause}");
     let stats = run.sim.stats();
@@ -90,7 +85,7 @@ fn random_loss_is_ridden_through_with_gaps_counted() {
     assert_rides_through(&run);
     let dropped = run.sim.stats().datagrams_dropped;
     assert!(dropped > 0);
-    assert!(run.client.gaps > 0 && run.client.gaps <= dropped);
+    assert!(run.robot.record().client.gaps > 0 && run.robot.record().client.gaps <= dropped);
     assert!(run.sim.stats().missed_cycles >= dropped);
 }
 
@@ -98,7 +93,7 @@ fn random_loss_is_ridden_through_with_gaps_counted() {
 #[test]
 fn loss_burst_trips_the_watchdog_then_reenters_without_jump() {
     let run = run(FriVersion::V2_5, "burst-loss@600:50", 1200);
-    assert!(run.controller.record().stale_steps > 0);
+    assert!(run.outcome.stale_steps > 0);
     assert_stopped_and_reentered(&run, "StaleSensor");
     assert!(run.sim.stats().overlay_aborts >= 1);
 }
@@ -108,7 +103,7 @@ fn delayed_datagrams_are_late_replies_then_stop() {
     let run = run(FriVersion::V2_7, "delay@600:300:2", 1300);
     let stats = run.sim.stats();
     assert!(stats.stray_replies > 0);
-    assert!(run.client.stale_datagrams > 0);
+    assert!(run.robot.record().client.stale_datagrams > 0);
     assert!(stats.overlay_aborts >= 1);
     assert_stopped_and_reentered(&run, "request Stop");
 }
@@ -116,7 +111,7 @@ fn delayed_datagrams_are_late_replies_then_stop() {
 #[test]
 fn duplicates_are_dropped_and_answered_once() {
     let run = run(FriVersion::V1_11, "duplicate@600:100", 900);
-    assert_eq!(run.client.duplicates, 100);
+    assert_eq!(run.robot.record().client.duplicates, 100);
     assert_eq!(run.sim.stats().stray_replies, 0);
     assert_rides_through(&run);
 }
@@ -124,16 +119,19 @@ fn duplicates_are_dropped_and_answered_once() {
 #[test]
 fn reordered_datagrams_keep_the_newest() {
     let run = run(FriVersion::V2_5, "reorder@600:8", 900);
-    assert_eq!(run.client.stale_datagrams, 4);
-    assert_eq!(run.client.gaps, 4);
+    assert_eq!(run.robot.record().client.stale_datagrams, 4);
+    assert_eq!(run.robot.record().client.gaps, 4);
     assert_rides_through(&run);
 }
 
 #[test]
 fn counter_jump_is_a_gap_and_handled() {
     let run = run(FriVersion::V1_16, "counter-jump@600:1:5000", 900);
-    assert_eq!(run.client.gaps, 1);
-    assert_eq!(run.client.stale_datagrams + run.client.duplicates, 0);
+    assert_eq!(run.robot.record().client.gaps, 1);
+    assert_eq!(
+        run.robot.record().client.stale_datagrams + run.robot.record().client.duplicates,
+        0
+    );
     assert_eq!(run.sim.stats().missed_with_delivery, 0);
     assert_rides_through(&run);
 }
@@ -153,14 +151,14 @@ fn drop_to_idle_is_silent_then_reenters_without_jump() {
     let stats = run.sim.stats();
     assert_eq!(stats.state_cycles[SessionState::Idle as usize], 50);
     assert_eq!(stats.stray_replies, 0, "the client answered in IDLE");
-    assert!(run.controller.record().overlay_lost_stops >= 1);
+    assert!(run.outcome.unfollowed_stops >= 1);
     assert_stopped_and_reentered(&run, "request Stop");
 }
 
 #[test]
 fn garbage_is_rejected() {
     let run = run(FriVersion::V1_15, "garbage@600:100", 900);
-    assert_eq!(run.client.rejected, 100);
+    assert_eq!(run.robot.record().client.rejected, 100);
     assert_eq!(run.sim.stats().missed_cycles, 0);
     assert_rides_through(&run);
 }
@@ -168,7 +166,7 @@ fn garbage_is_rejected() {
 #[test]
 fn wrong_crc_is_rejected_as_a_lost_datagram() {
     let run = run(FriVersion::V2_7, "wrong-crc@600:5", 900);
-    assert_eq!(run.client.rejected, 5);
+    assert_eq!(run.robot.record().client.rejected, 5);
     assert_eq!(run.sim.stats().missed_cycles, 5);
     assert_rides_through(&run);
 }
@@ -183,7 +181,7 @@ fn wrench_overlay_loss_burst_trips_the_watchdog_then_reenters() {
     assert_eq!(kernel_state(&run), StateKind::SafeStop);
     assert_eq!(run.sim.stats().commanding_entries, 2);
     assert_eq!(run.sim.state(), SessionState::CommandingActive);
-    let command = run.controller.record().last_command.unwrap();
+    let command = run.last_command.unwrap();
     assert_eq!(command.wrench, limb_kernel::geometry::Wrench::ZERO);
     eprintln!("grasp after the stop: {:?}", run.sim.plant().truth());
 }

@@ -4,10 +4,14 @@
 //! answers, see README).
 
 use limb_kernel::StateKind;
-use limb_kuka::kernel_controller::Overlay;
 use limb_kuka::loopback::{run_reference_session, LoopbackRun};
+use limb_kuka::robot::Overlay;
 use limb_kuka::sim_controller::{Pacing, SimSettings};
 use limb_kuka::FriVersion;
+use limb_session::operator::describe;
+use limb_session::Operator;
+
+type Run = LoopbackRun<Operator>;
 use std::sync::Mutex;
 
 /// Estimation motion (~29.3 s) + start-up, in 1 ms cycles.
@@ -16,7 +20,7 @@ const ESTIMATION_CYCLES: u64 = 32_000;
 /// One loop at a time, to keep the suite's load on two cores modest.
 static SERIAL: Mutex<()> = Mutex::new(());
 
-fn estimate(version: FriVersion, overlay: Overlay) -> LoopbackRun {
+fn estimate(version: FriVersion, overlay: Overlay) -> Run {
     let _serial = SERIAL
         .lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
@@ -26,7 +30,6 @@ fn estimate(version: FriVersion, overlay: Overlay) -> LoopbackRun {
         state >= StateKind::Validated
     })
     .unwrap();
-    let record = run.controller.record();
     eprintln!(
         "{version} {overlay:?}: sim {:?}\nclient {:?}\nevents {:?}\nmodel {:?}",
         {
@@ -34,25 +37,23 @@ fn estimate(version: FriVersion, overlay: Overlay) -> LoopbackRun {
             stats.round_trips_us.clear();
             stats
         },
-        run.client,
-        record.events,
-        record.model
+        run.robot.record().client,
+        run.events,
+        run.outcome.model
     );
     run
 }
 
-fn assert_estimated(run: &LoopbackRun) {
-    let record = run.controller.record();
+fn assert_estimated(run: &Run) {
     assert!(
-        record
-            .events
+        run.events
             .iter()
-            .any(|(_, what)| what.starts_with("Estimate → Validated")),
+            .any(|event| describe(event).starts_with("Estimate → Validated")),
         "{:?}",
-        record.events
+        run.events
     );
-    assert_ne!(run.controller.kernel().state().kind(), StateKind::SafeStop);
-    let model = record.model.expect("a validated model");
+    assert_ne!(run.kernel.state().kind(), StateKind::SafeStop);
+    let model = run.outcome.model.expect("a validated model");
     let truth = run.sim.plant().truth();
     assert!((model.upper_arm_length - 0.30).abs() < 1e-3, "{model:?}");
     assert!((model.forearm_length - 0.20).abs() < 1e-3, "{model:?}");

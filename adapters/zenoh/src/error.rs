@@ -9,12 +9,13 @@ pub enum AdapterError {
     #[error("robot id {0:?} must be non-empty ASCII letters, digits, '-' or '_'")]
     RobotId(String),
     /// The kernel configuration failed its check.
-    #[error("kernel configuration refused: {0:?}")]
+    #[error("kernel configuration refused: {0}")]
     KernelConfig(ConfigError),
     /// The control period or another adapter setting is unusable.
     #[error("adapter setting refused: {0}")]
     Setting(&'static str),
     /// Zenoh refused a configuration value or an operation.
+    #[cfg(feature = "link")]
     #[error("zenoh: {0}")]
     Zenoh(#[from] zenoh::Error),
     /// A message could not be encoded or decoded.
@@ -27,6 +28,9 @@ pub enum AdapterError {
     /// path on purpose).
     #[error("the control loop panicked")]
     LoopPanicked,
+    /// The robot's I/O failed and ended the session.
+    #[error("robot: {0}")]
+    Robot(String),
     /// No answer arrived in time.
     #[error("timed out waiting for {0}")]
     Timeout(&'static str),

@@ -24,6 +24,7 @@ use limb_kernel::monitor::{Limit, Violation};
 use limb_kernel::motion::{PlanError, SetPoint};
 use limb_kernel::state::TargetError;
 use limb_kernel::trace::{Cause as KernelCause, Event, TraceEvent};
+use limb_kernel::validate::Rejection;
 use limb_kernel::RefusalReason;
 use limb_kernel::{Command, PathSample, Refusal, Request, StateKind, StopReason};
 use serde::{Deserialize, Serialize};
@@ -235,10 +236,10 @@ impl From<RefusalReason> for Fault {
 /// The circle fits' errors have no kernel code; theirs is here.
 fn circle_fault(e: CircleFitError) -> Fault {
     match e {
-        CircleFitError::TooFewPoints => Fault::named(1, "too_few_points"),
-        CircleFitError::TooManyPoints => Fault::named(2, "too_many_points"),
-        CircleFitError::Degenerate => Fault::named(3, "degenerate"),
-        CircleFitError::NonFinite => Fault::named(4, "non_finite"),
+        CircleFitError::TooFewPoints => Fault::named(e.code(), "too_few_points"),
+        CircleFitError::TooManyPoints => Fault::named(e.code(), "too_many_points"),
+        CircleFitError::Degenerate => Fault::named(e.code(), "degenerate"),
+        CircleFitError::NonFinite => Fault::named(e.code(), "non_finite"),
     }
 }
 
@@ -264,9 +265,7 @@ impl From<StopReason> for Fault {
             StopReason::Operator => fault("operator"),
             StopReason::EstimationFailed(e) => fault("estimation_failed").caused_by(e.into()),
             StopReason::ModelRejected(rejection) => {
-                let mut f = fault("model_rejected");
-                f.detail = Some(format!("{rejection:?}"));
-                f
+                fault("model_rejected").caused_by(rejection.into())
             }
             StopReason::PathBufferFull => fault("path_buffer_full"),
             StopReason::PlanFailed(p) => fault("plan_failed").caused_by(p.into()),
@@ -275,18 +274,35 @@ impl From<StopReason> for Fault {
     }
 }
 
+/// The field (code and path, e.g. 201 `limits.max_force`), caused by
+/// the problem with its value (e.g. 2 `not_positive`).
 impl From<ConfigError> for Fault {
     fn from(e: ConfigError) -> Self {
-        let name = match e {
-            ConfigError::ImpedanceGain => "impedance_gain",
-            ConfigError::Limit => "limit",
-            ConfigError::Range => "range",
-            ConfigError::EstimationMotion => "estimation_motion",
-            ConfigError::PlannedSpeed => "planned_speed",
-            ConfigError::Validation => "validation",
-            ConfigError::LiftShaping => "lift_shaping",
+        Fault::named(e.code(), e.field.path())
+            .caused_by(Fault::named(e.problem.code(), e.problem.name()))
+    }
+}
+
+/// The failed validation check (stable code and name); the value it found
+/// as informative detail.
+impl From<Rejection> for Fault {
+    fn from(r: Rejection) -> Self {
+        let name = match r {
+            Rejection::NonFinite => "non_finite",
+            Rejection::UpperArmLengthOutOfRange(_) => "upper_arm_length_out_of_range",
+            Rejection::ForearmLengthOutOfRange(_) => "forearm_length_out_of_range",
+            Rejection::ForearmArcTooShort(_) => "forearm_arc_too_short",
+            Rejection::UpperArmArcTooShort(_) => "upper_arm_arc_too_short",
+            Rejection::ForearmResidualTooLarge(_) => "forearm_residual_too_large",
+            Rejection::UpperArmResidualTooLarge(_) => "upper_arm_residual_too_large",
+            Rejection::MethodsDisagree(_) => "methods_disagree",
+            Rejection::NoIndependentMethod => "no_independent_method",
+            Rejection::GeometryInconsistent(_) => "geometry_inconsistent",
+            Rejection::ShoulderOffTable(_) => "shoulder_off_table",
         };
-        Fault::named(e.code(), name)
+        let mut fault = Fault::named(r.code(), name);
+        fault.detail = r.value().map(|v| format!("{v}"));
+        fault
     }
 }
 

@@ -1,78 +1,113 @@
-//! A kernel node: the control loop thread stepping a boxed kernel at a
-//! fixed period from a [`SensorSource`], supervised over a [`Link`].
+//! A kernel node: a `limb-session` session on its own thread, any robot
+//! on the robot side, the Zenoh link's [`Supervision`] on the supervisor
+//! side.
 //!
-//! The node owns time: kernel time is `origin + (Instant::now() − epoch)`
-//! [s], monotonic. The loop sleeps to absolute deadlines; a step that
-//! starts more than one period late is counted as an overrun and the
-//! schedule restarts from now (no burst of catch-up steps).
+//! The robot sets the rhythm (an FRI client answers each monitoring
+//! message); a simulated plant with no rhythm of its own is paced at a
+//! fixed period ([`limb_session::paced::Paced`]: absolute deadlines, an
+//! overrun restarts the schedule and is counted in the status).
 
 use crate::error::AdapterError;
 use crate::link::{Link, LinkSettings, LoopView, Supervision};
-use crate::sensor::SensorSource;
 use limb_kernel::Kernel;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
+use limb_session::paced::Paced;
+use limb_session::{Observer, Outcome, Robot, Unobserved};
 use std::thread::JoinHandle;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
-/// Stack of the control-loop thread [bytes]: the kernel itself is boxed,
-/// but the estimator's end-of-motion step needs more than Rust's 2 MB
-/// default in debug builds.
+/// Stack of the session thread [bytes]: the kernel itself is boxed, but
+/// the estimator's end-of-motion step needs more than Rust's 2 MB default
+/// in debug builds.
 const LOOP_STACK: usize = 16 * 1024 * 1024;
 
-/// Settings of a node's control loop.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct LoopSettings {
-    /// Control period, e.g. 1 ms for 1 kHz.
-    pub period: Duration,
-    /// Kernel time at the first step [s] (0 for a new kernel, the time a
-    /// replayed or pre-driven kernel reached otherwise).
-    pub origin: f64,
-}
+/// The session thread's result: the kernel, how the session ended (or the
+/// robot's failure, in words) and the observer.
+type Ended<O> = (Box<Kernel>, Result<Outcome, String>, O);
 
-/// A running node: control loop plus Zenoh link. Dropping it without
-/// [`Node::shutdown`] stops the loop too (without waiting for it).
-pub struct Node {
+/// A running node: session thread plus Zenoh link, and what observes the
+/// session (a session log). Dropping it without [`Node::shutdown`] ends
+/// the session too (without waiting for it).
+pub struct Node<O = Unobserved> {
     /// `Some` until shutdown.
     link: Option<Link>,
     view: LoopView,
-    stop: Arc<AtomicBool>,
     /// `Some` until shutdown.
-    control_loop: Option<JoinHandle<Box<Kernel>>>,
+    control_loop: Option<JoinHandle<Ended<O>>>,
 }
 
 impl Node {
-    /// Opens the link and starts the control loop on `kernel`.
+    /// Opens the link and runs a session of `kernel` on `robot`, paced at
+    /// `period` when given (a robot without a rhythm of its own).
     ///
     /// # Errors
     /// [`AdapterError`] for a bad setting, a Zenoh failure, or a thread
     /// that could not start.
-    pub fn spawn(
+    pub fn spawn<R>(
         zenoh_config: zenoh::Config,
         link_settings: &LinkSettings,
-        loop_settings: LoopSettings,
+        period: Option<Duration>,
         kernel: Box<Kernel>,
-        source: Box<dyn SensorSource>,
-    ) -> Result<Self, AdapterError> {
-        if loop_settings.period.is_zero() || !loop_settings.origin.is_finite() {
-            return Err(AdapterError::Setting(
-                "the control period must be positive and the origin finite",
-            ));
+        robot: R,
+    ) -> Result<Self, AdapterError>
+    where
+        R: Robot + Send + 'static,
+        R::Error: core::fmt::Debug,
+    {
+        Self::spawn_observed(
+            zenoh_config,
+            link_settings,
+            period,
+            kernel,
+            robot,
+            Unobserved,
+        )
+    }
+}
+
+impl<O: Send + 'static> Node<O> {
+    /// [`Node::spawn`], the session shown to `observer` (e.g. a
+    /// `limb_session::log::SessionLog`), returned by [`Node::finish`].
+    ///
+    /// # Errors
+    /// As [`Node::spawn`].
+    pub fn spawn_observed<R>(
+        zenoh_config: zenoh::Config,
+        link_settings: &LinkSettings,
+        period: Option<Duration>,
+        mut kernel: Box<Kernel>,
+        robot: R,
+        mut observer: O,
+    ) -> Result<Self, AdapterError>
+    where
+        R: Robot + Send + 'static,
+        R::Error: core::fmt::Debug,
+        O: Observer<R> + Observer<Paced<R>>,
+    {
+        if period.is_some_and(|p| p.is_zero()) {
+            return Err(AdapterError::Setting("the control period must be positive"));
         }
-        let (link, supervision) = Link::open(zenoh_config, link_settings, *kernel.config())?;
+        let (link, mut supervision) = Link::open(zenoh_config, link_settings, *kernel.config())?;
         let view = supervision.view();
-        let stop = Arc::new(AtomicBool::new(false));
         let control_loop = std::thread::Builder::new()
             .name("limb-control".into())
             .stack_size(LOOP_STACK)
-            .spawn({
-                let stop = Arc::clone(&stop);
-                move || run(kernel, source, supervision, loop_settings, &stop)
+            .spawn(move || {
+                let outcome = match period {
+                    Some(period) => {
+                        let mut paced = Paced::new(robot, period);
+                        supervision.count_overruns(paced.overruns());
+                        run(&mut kernel, &mut paced, &mut supervision, &mut observer)
+                    }
+                    None => {
+                        let mut robot = robot;
+                        run(&mut kernel, &mut robot, &mut supervision, &mut observer)
+                    }
+                };
+                (kernel, outcome, observer)
             })?;
         Ok(Self {
             link: Some(link),
             view,
-            stop,
             control_loop: Some(control_loop),
         })
     }
@@ -87,14 +122,33 @@ impl Node {
         self.link.as_ref().map(Link::session)
     }
 
-    /// Stops the loop, closes the link and returns the kernel.
+    /// Ends the session, closes the link and returns the kernel.
     ///
     /// # Errors
-    /// [`AdapterError::LoopPanicked`] if the loop thread panicked (a bug), or a
-    /// Zenoh failure while closing.
-    pub fn shutdown(mut self) -> Result<Box<Kernel>, AdapterError> {
-        self.stop.store(true, Ordering::Release);
-        let kernel = self
+    /// As [`Node::finish`].
+    pub fn shutdown(self) -> Result<Box<Kernel>, AdapterError> {
+        self.finish().map(|(kernel, _)| kernel)
+    }
+
+    /// Ends the session, closes the link and returns the kernel and the
+    /// observer.
+    ///
+    /// # Errors
+    /// [`AdapterError::LoopPanicked`] if the loop thread panicked (a bug),
+    /// [`AdapterError::Robot`] if the robot's I/O failed, or a Zenoh
+    /// failure while closing.
+    pub fn finish(self) -> Result<(Box<Kernel>, O), AdapterError> {
+        self.end().map(|(kernel, _, observer)| (kernel, observer))
+    }
+
+    /// [`Node::finish`], with how the session ended (its step count, the
+    /// soak's reference for the session log's rows).
+    ///
+    /// # Errors
+    /// As [`Node::finish`].
+    pub fn end(mut self) -> Result<(Box<Kernel>, Outcome, O), AdapterError> {
+        self.view.end_session();
+        let (kernel, outcome, observer) = self
             .control_loop
             .take()
             .ok_or(AdapterError::LoopPanicked)?
@@ -103,39 +157,27 @@ impl Node {
         if let Some(link) = self.link.take() {
             link.close()?;
         }
-        Ok(kernel)
+        let outcome = outcome.map_err(AdapterError::Robot)?;
+        Ok((kernel, outcome, observer))
     }
 }
 
-impl Drop for Node {
+impl<O> Drop for Node<O> {
     fn drop(&mut self) {
-        self.stop.store(true, Ordering::Release);
+        self.view.end_session();
     }
 }
 
-fn run(
-    mut kernel: Box<Kernel>,
-    mut source: Box<dyn SensorSource>,
-    mut supervision: Supervision,
-    settings: LoopSettings,
-    stop: &AtomicBool,
-) -> Box<Kernel> {
-    let epoch = supervision.epoch();
-    let mut deadline = Instant::now();
-    while !stop.load(Ordering::Acquire) {
-        let now = settings.origin + epoch.elapsed().as_secs_f64();
-        supervision.before_step(&mut kernel, now);
-        let frame = source.frame(now);
-        let command = kernel.step(&frame, now);
-        supervision.after_step(&mut kernel, &frame, &command, now);
-        deadline += settings.period;
-        let current = Instant::now();
-        if let Some(wait) = deadline.checked_duration_since(current) {
-            std::thread::sleep(wait);
-        } else if current.duration_since(deadline) > settings.period {
-            supervision.record_overrun();
-            deadline = current;
-        }
-    }
-    kernel
+fn run<R, O>(
+    kernel: &mut Kernel,
+    robot: &mut R,
+    supervision: &mut Supervision,
+    observer: &mut O,
+) -> Result<Outcome, String>
+where
+    R: Robot,
+    R::Error: core::fmt::Debug,
+    O: Observer<R>,
+{
+    limb_session::run(kernel, robot, supervision, observer).map_err(|e| format!("{e:?}"))
 }

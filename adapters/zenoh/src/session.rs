@@ -22,12 +22,39 @@ pub fn peer_config(
     connect: &[String],
     lease_ms: u64,
 ) -> Result<zenoh::Config, AdapterError> {
+    config("peer", listen, connect, lease_ms)
+}
+
+/// A router (what `zenohd` runs) listening on `listen`: the deployment's
+/// hub that nodes and supervisor stations connect to as clients.
+///
+/// # Errors
+/// [`AdapterError::Zenoh`] when Zenoh refuses a value.
+pub fn router_config(listen: &[String], lease_ms: u64) -> Result<zenoh::Config, AdapterError> {
+    config("router", listen, &[], lease_ms)
+}
+
+/// A client of the router at `connect` (a node or a supervisor station in
+/// a routed deployment): it talks only through the router.
+///
+/// # Errors
+/// [`AdapterError::Zenoh`] when Zenoh refuses a value.
+pub fn client_config(connect: &[String], lease_ms: u64) -> Result<zenoh::Config, AdapterError> {
+    config("client", &[], connect, lease_ms)
+}
+
+fn config(
+    mode: &str,
+    listen: &[String],
+    connect: &[String],
+    lease_ms: u64,
+) -> Result<zenoh::Config, AdapterError> {
     let mut config = zenoh::Config::default();
     let list = |endpoints: &[String]| {
         serde_json::to_string(endpoints)
             .map_err(|_| AdapterError::Setting("endpoints could not be written as JSON"))
     };
-    config.insert_json5("mode", r#""peer""#)?;
+    config.insert_json5("mode", &format!("{mode:?}"))?;
     config.insert_json5("scouting/multicast/enabled", "false")?;
     config.insert_json5("scouting/gossip/enabled", "false")?;
     config.insert_json5("listen/endpoints", &list(listen)?)?;

@@ -62,6 +62,7 @@ pub enum WireError {
 
 impl WireFormat {
     /// The Zenoh encoding announced with each sample.
+    #[cfg(feature = "link")]
     pub fn encoding(self) -> zenoh::bytes::Encoding {
         match self {
             WireFormat::Json => zenoh::bytes::Encoding::APPLICATION_JSON,
@@ -279,6 +280,22 @@ pub struct EventMessage {
     pub kernel_dropped: u32,
     /// The event.
     pub event: KernelEvent,
+    /// Who asked for the stop, when the event is a transition into
+    /// SafeStop that this node's supervision requested (absent otherwise).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub origin: Option<StopOrigin>,
+}
+
+/// Which of the node's supervisory paths stopped the kernel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StopOrigin {
+    /// An emergency stop on `cmd/estop` (unsigned, express).
+    EmergencyStop,
+    /// A signed `stop` command on `cmd/request`.
+    Command,
+    /// The supervisor watchdog: heartbeats stopped (policy `stop`).
+    SupervisorLost,
 }
 
 /// One control step on `telemetry/sample` (decimated).
@@ -420,6 +437,29 @@ mod tests {
         let text = br#"{"sequence": 7, "command": {"command": "approve_manipulation",
             "target": {"shoulder_elevation": 0.6, "elbow_flexion": 0.8}}}"#;
         assert_eq!(WireFormat::Json.decode_command(text).unwrap(), approve());
+    }
+
+    /// Found by the `zenoh_command` fuzz target: serde_json's default
+    /// float parser may land one unit in the last place off the nearest
+    /// double for a long mantissa, so the command acted on was not the
+    /// number sent, and its own encoding read back as another one. Numbers
+    /// are now read correctly rounded (`float_roundtrip`).
+    #[test]
+    fn json_numbers_are_read_correctly_rounded() {
+        let sent = br#"{"sequence":1000000000,"command":{"command":"approve_manipulation","target":{"shoulder_elevation":25000000000000000000000000000000000000001295154896,"elbow_flexion":1.8}}}"#;
+        let json = WireFormat::Json;
+        let message = json.decode_command(sent).unwrap();
+        let SupervisorCommand::ApproveManipulation { target } = message.command else {
+            panic!("not an approval: {message:?}");
+        };
+        // The nearest double to the decimal sent (Rust's own parser is
+        // correctly rounded).
+        let nearest: f64 = "25000000000000000000000000000000000000001295154896"
+            .parse()
+            .unwrap();
+        assert_eq!(target.shoulder_elevation.to_bits(), nearest.to_bits());
+        let again = json.encode(&message).unwrap();
+        assert_eq!(json.decode_command(&again).unwrap(), message);
     }
 
     #[test]

@@ -3,17 +3,19 @@
 
 mod common;
 
+use common::lift::Lift;
 use common::{connect, link_settings, rig, wait_until, RigOptions, TIMEOUT};
 use limb_kernel::config::{Interval, SafetyLimits};
 use limb_kernel::{KernelConfig, StateKind};
+use limb_session::Supervisor as _;
 use limb_verification::scenario::TARGET;
 use limb_zenoh::auth::CommandKey;
+use limb_zenoh::kernel_wire::KernelEvent;
 use limb_zenoh::link::Link;
-use limb_zenoh::sensor::{ScriptedLift, SensorSource};
 use limb_zenoh::session::{free_loopback_port, peer_config};
 use limb_zenoh::wire::{
     AckOutcome, AckSubject, ArmModel, CommandMessage, EventMessage, RefuseReason, StateSnapshot,
-    SupervisorCommand, WireFormat,
+    StopOrigin, SupervisorCommand, WireFormat,
 };
 use std::time::Duration;
 use zenoh::Wait;
@@ -291,31 +293,62 @@ fn events_arrive_in_order_without_loss() {
     rig.close();
 }
 
-/// Attach: another adapter's loop owns the kernel and calls the hooks
-/// around its own steps.
-#[test]
-fn another_loop_can_attach_the_supervision_hooks() {
-    let mut lift = ScriptedLift::reference();
-    let (mut kernel, origin) = lift.kernel_after_lift();
+/// A kernel after the synthetic lift in the test's own loop, a link whose
+/// supervision that loop calls, and a connected supervisor that has sent
+/// the approval of the manipulation (`sequence`).
+struct Attached {
+    kernel: Box<limb_kernel::Kernel>,
+    lift: Lift,
+    link: Link,
+    supervision: limb_zenoh::link::Supervision,
+    supervisor: limb_zenoh::supervisor::Supervisor,
+    sequence: u64,
+}
+
+fn attached() -> Attached {
+    let (kernel, lift) = Lift::reference().kernel_after_lift();
     let endpoint = format!("tcp/127.0.0.1:{}", free_loopback_port().unwrap());
     let config = peer_config(std::slice::from_ref(&endpoint), &[], 1000).unwrap();
     let settings = link_settings(&RigOptions::default());
-    let (link, mut supervision) = Link::open(config, &settings, *kernel.config()).unwrap();
+    let (link, supervision) = Link::open(config, &settings, *kernel.config()).unwrap();
     let mut supervisor = connect(&endpoint, settings.format, common::key());
     let sequence = supervisor
         .send(SupervisorCommand::ApproveManipulation {
             target: TARGET.into(),
         })
         .unwrap();
+    Attached {
+        kernel,
+        lift,
+        link,
+        supervision,
+        supervisor,
+        sequence,
+    }
+}
+
+/// Attach: another loop owns the kernel and calls the supervision's
+/// `limb_session::Supervisor` hooks around its own steps.
+#[test]
+fn another_loop_can_attach_the_supervision_hooks() {
+    let Attached {
+        mut kernel,
+        lift,
+        link,
+        mut supervision,
+        supervisor,
+        sequence,
+    } = attached();
+    let origin = lift.origin();
     let epoch = supervision.epoch();
     let mut ack = None;
     // The other adapter's loop: bounded to 500 steps of about 5 ms.
     for _ in 0..500 {
         let now = origin + epoch.elapsed().as_secs_f64();
-        supervision.before_step(&mut kernel, now);
+        supervision.before_step(&mut kernel, now, true);
         let frame = lift.frame(now);
         let command = kernel.step(&frame, now);
-        supervision.after_step(&mut kernel, &frame, &command, now);
+        supervision.after_step(&kernel, &frame, &command, now);
         let wait = Duration::from_millis(5);
         if let Ok(found) = supervisor.wait_ack(|a| a.sequence == Some(sequence), wait) {
             ack = Some(found);
@@ -328,7 +361,50 @@ fn another_loop_can_attach_the_supervision_hooks() {
     link.close().unwrap();
 }
 
-/// Finding 2 of issue 18: two emergency stops in one control period each
+/// REQ-ADP-003: A loop that steps far faster than the publisher thread publishes
+/// samples (an unpaced simulation on a loaded machine) loses samples, never
+/// the ack of a command: samples take at most half the outbound queue.
+/// (They used to fill all of it; the ack was dropped, and the whole KUKA
+/// session under Zenoh, `tests/robots.rs`, wedged.)
+#[test]
+fn a_flood_of_samples_does_not_crowd_out_an_ack() {
+    let mut a = attached();
+    let frame = a.lift.frame(a.lift.origin());
+    let mut ack = None;
+    // Each round: two thousand steps at once, far more samples than the
+    // publisher thread can put meanwhile, then the command (once it has
+    // arrived) is applied while they wait.
+    let start = std::time::Instant::now();
+    for round in 0u32.. {
+        if start.elapsed() > TIMEOUT {
+            break;
+        }
+        let now = a.lift.origin() + f64::from(round) * 1e-3;
+        for _ in 0..2_000 {
+            let command = a.kernel.step(&frame, now);
+            a.supervision.after_step(&a.kernel, &frame, &command, now);
+        }
+        a.supervision.before_step(&mut a.kernel, now, true);
+        let wait = Duration::from_millis(5);
+        if let Ok(found) = a
+            .supervisor
+            .wait_ack(|k| k.sequence == Some(a.sequence), wait)
+        {
+            ack = Some(found);
+            break;
+        }
+    }
+    let counters = a.supervision.counters();
+    eprintln!("{counters:?}");
+    assert!(counters.samples_dropped > 0, "the publisher kept up");
+    assert_eq!(counters.reliable_dropped, 0);
+    let ack = ack.unwrap_or_else(|| panic!("no ack within {TIMEOUT:?}"));
+    assert_eq!(ack.outcome, accepted(StateKind::Manipulate));
+    a.supervisor.close().unwrap();
+    a.link.close().unwrap();
+}
+
+/// REQ-ADP-003: Finding 2 of issue 18: two emergency stops in one control period each
 /// get their own ack (the second used to overwrite the first's sequence,
 /// and the first sender timed out).
 #[test]
@@ -373,5 +449,63 @@ fn supervisors_connected_at_different_times_share_the_sequence() {
     let ack = later.request(SupervisorCommand::Stop, TIMEOUT).unwrap();
     assert_eq!(ack.outcome, accepted(StateKind::SafeStop));
     later.close().unwrap();
+    rig.close();
+}
+
+/// An e-stop, a signed stop and a supervisor-loss stop are told apart on
+/// `telemetry/event`: each one's transition into SafeStop carries its
+/// origin.
+#[test]
+fn each_stop_event_names_its_origin() {
+    let mut rig = rig(RigOptions::default());
+    let (tx, events) = std::sync::mpsc::channel();
+    let format = rig.format;
+    let _subscriber = rig
+        .supervisor
+        .session()
+        .declare_subscriber(rig.supervisor.keys().event())
+        .callback(move |sample| {
+            if let Ok(event) = format.decode::<EventMessage>(&sample.payload().to_bytes()) {
+                let _ = tx.send(event);
+            }
+        })
+        .wait()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(100));
+    // The next transition's origin (refusals and lift events are not
+    // stops); an unexpected transition, e.g. a monitor stop, is shown.
+    let next_origin = || loop {
+        let event = events
+            .recv_timeout(TIMEOUT)
+            .unwrap_or_else(|e| panic!("no stop event: {e}"));
+        if matches!(event.event, KernelEvent::Transition { .. }) {
+            println!("{event:?}");
+            break event.origin;
+        }
+    };
+    let stop = rig
+        .supervisor
+        .request(SupervisorCommand::Stop, TIMEOUT)
+        .unwrap();
+    assert_eq!(stop.outcome, accepted(StateKind::SafeStop));
+    assert_eq!(next_origin(), Some(StopOrigin::Command));
+    let reset = rig
+        .supervisor
+        .request(SupervisorCommand::Reset, TIMEOUT)
+        .unwrap();
+    assert_eq!(reset.outcome, accepted(StateKind::Grasp));
+    assert_eq!(next_origin(), None, "the reset's transition");
+    rig.supervisor.emergency_stop().unwrap();
+    assert_eq!(next_origin(), Some(StopOrigin::EmergencyStop));
+    rig.supervisor
+        .request(SupervisorCommand::Reset, TIMEOUT)
+        .unwrap();
+    assert_eq!(next_origin(), None, "the reset's transition");
+    rig.supervisor
+        .start_heartbeat(Duration::from_millis(50))
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(200));
+    rig.supervisor.stop_heartbeat();
+    assert_eq!(next_origin(), Some(StopOrigin::SupervisorLost));
     rig.close();
 }

@@ -5,7 +5,7 @@
 //! new protocol version when old readers would misread it).
 
 use limb_kernel::command::CommandMode;
-use limb_kernel::config::{ConfigError, Interval, SafetyLimits};
+use limb_kernel::config::{ConfigError, ConfigField, ConfigProblem, Interval, SafetyLimits};
 use limb_kernel::geometry::{Point, Pose, PoseRate, Wrench};
 use limb_kernel::impedance::Saturation;
 use limb_kernel::lift::LiftEnd;
@@ -13,6 +13,7 @@ use limb_kernel::monitor::{Limit, Violation};
 use limb_kernel::motion::SetPoint;
 use limb_kernel::state::TargetError;
 use limb_kernel::trace::{Cause, Event, TraceEvent};
+use limb_kernel::validate::Rejection;
 use limb_kernel::RefusalReason;
 use limb_kernel::{Command, PathSample, Refusal, Request, StateKind, StopReason};
 use limb_zenoh::auth::CommandKey;
@@ -20,7 +21,7 @@ use limb_zenoh::kernel_wire::{Joints, KernelRefusal, PlanarPoint};
 use limb_zenoh::keys::Keys;
 use limb_zenoh::wire::{
     Ack, AckOutcome, AckSubject, ArmModel, CommandMessage, EmergencyStopMessage, EventMessage,
-    Heartbeat, KernelStatus, LinkMessage, NodeCounters, RefuseReason, SampleMessage,
+    Heartbeat, KernelStatus, LinkMessage, NodeCounters, RefuseReason, SampleMessage, StopOrigin,
     SupervisorCommand, WireFormat,
 };
 use serde::de::DeserializeOwned;
@@ -198,7 +199,7 @@ fn messages() -> Golden {
     m.insert(
         "ack_invalid_limits",
         both_ways(&refused(RefuseReason::InvalidLimits {
-            error: ConfigError::Range.into(),
+            error: ConfigError::new(ConfigField::ElbowFlexion, ConfigProblem::EmptyInterval).into(),
         })),
     );
     m.insert(
@@ -226,6 +227,7 @@ fn messages() -> Golden {
                 },
             }
             .into(),
+            origin: None,
         }),
     );
     m.insert(
@@ -246,6 +248,43 @@ fn messages() -> Golden {
                 },
             }
             .into(),
+            origin: None,
+        }),
+    );
+    m.insert(
+        "event_emergency_stop",
+        both_ways(&EventMessage {
+            sequence: 7,
+            kernel_dropped: 0,
+            event: TraceEvent {
+                time: 16.5,
+                event: Event::Transition {
+                    from: StateKind::Manipulate,
+                    to: StateKind::SafeStop,
+                    cause: Cause::Request(Request::Stop),
+                },
+            }
+            .into(),
+            origin: Some(StopOrigin::EmergencyStop),
+        }),
+    );
+    m.insert(
+        "event_model_rejected",
+        both_ways(&EventMessage {
+            sequence: 2,
+            kernel_dropped: 0,
+            event: TraceEvent {
+                time: 31.5,
+                event: Event::Transition {
+                    from: StateKind::Estimate,
+                    to: StateKind::SafeStop,
+                    cause: Cause::Stop(StopReason::ModelRejected(
+                        Rejection::UpperArmLengthOutOfRange(0.5),
+                    )),
+                },
+            }
+            .into(),
+            origin: None,
         }),
     );
     m.insert(
@@ -262,6 +301,7 @@ fn messages() -> Golden {
                 }),
             }
             .into(),
+            origin: None,
         }),
     );
     m.insert(
@@ -274,6 +314,7 @@ fn messages() -> Golden {
                 event: Event::LiftEnded(LiftEnd::JointMargin(Limit::ShoulderElevation)),
             }
             .into(),
+            origin: None,
         }),
     );
     m.insert(

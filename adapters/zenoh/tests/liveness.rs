@@ -127,7 +127,7 @@ fn the_loss_and_the_return_of_the_supervisor_are_published() {
     rig.close();
 }
 
-/// Finding 1 of issue 18: a captured signed heartbeat, replayed after its
+/// REQ-ADP-003: Finding 1 of issue 18: a captured signed heartbeat, replayed after its
 /// supervisor hung, does not keep the node supervised: the loss is
 /// detected, reported, and the replays are counted.
 #[test]
@@ -178,7 +178,7 @@ fn a_replayed_heartbeat_does_not_keep_the_supervisor_present() {
     rig.close();
 }
 
-/// The emergency stop reaches the kernel within one control period of its
+/// REQ-ADP-003: The emergency stop reaches the kernel within one control period of its
 /// arrival while the supervisor's own telemetry subscriber is full and
 /// never drained (1 kHz samples, a 256-sample FIFO nobody reads).
 #[test]

@@ -6,10 +6,11 @@
 
 mod common;
 
+use common::lift::Lift;
+
 use common::{key, link_settings, RigOptions, ROBOT, TIMEOUT};
 use limb_kernel::StateKind;
-use limb_zenoh::node::{LoopSettings, Node};
-use limb_zenoh::sensor::ScriptedLift;
+use limb_zenoh::node::Node;
 use limb_zenoh::session::{free_loopback_port, peer_config, set_tls, TlsFiles};
 use limb_zenoh::supervisor::Supervisor;
 use limb_zenoh::wire::{AckOutcome, SupervisorCommand, WireFormat};
@@ -61,17 +62,14 @@ fn commands_over_tls_reach_only_a_node_the_supervisor_trusts() {
         },
     )
     .unwrap();
-    let lift = ScriptedLift::reference();
-    let (kernel, origin) = lift.kernel_after_lift();
+    let lift = Lift::reference();
+    let (kernel, lift) = lift.kernel_after_lift();
     let node = Node::spawn(
         config,
         &link_settings(&RigOptions::default()),
-        LoopSettings {
-            period: Duration::from_millis(2),
-            origin,
-        },
+        Some(Duration::from_millis(2)),
         kernel,
-        Box::new(lift),
+        lift,
     )
     .unwrap();
 

@@ -4,12 +4,13 @@
 
 mod common;
 
+use common::lift::Lift;
+
 use common::{link_settings, wait_until, RigOptions, ROBOT, TIMEOUT};
 use limb_kernel::StateKind;
 use limb_verification::scenario::TARGET;
 use limb_zenoh::keys::Keys;
-use limb_zenoh::node::{LoopSettings, Node};
-use limb_zenoh::sensor::ScriptedLift;
+use limb_zenoh::node::Node;
 use limb_zenoh::session::{free_loopback_port, peer_config, protect_commands, set_credentials};
 use limb_zenoh::supervisor::Supervisor;
 use limb_zenoh::wire::{AckOutcome, SupervisorCommand};
@@ -22,7 +23,7 @@ fn session(endpoint: &str, user: &str, password: &str) -> zenoh::Config {
     config
 }
 
-/// Security: an observer (a safety panel) holding even the command key
+/// REQ-ADP-003: Security: an observer (a safety panel) holding even the command key
 /// cannot approve a manipulation — Zenoh drops its command at the node's
 /// ingress — but its emergency stop works; a wrong password never connects.
 #[test]
@@ -40,18 +41,15 @@ fn access_control_drops_an_observers_command_but_not_its_emergency_stop() {
     set_credentials(&mut node_config, "node", "node-password").unwrap();
     let keys = Keys::new(ROBOT).unwrap();
     protect_commands(&mut node_config, &keys, &dictionary, &["panel".to_owned()]).unwrap();
-    let lift = ScriptedLift::reference();
-    let (kernel, origin) = lift.kernel_after_lift();
+    let lift = Lift::reference();
+    let (kernel, lift) = lift.kernel_after_lift();
     let options = RigOptions::default();
     let node = Node::spawn(
         node_config,
         &link_settings(&options),
-        LoopSettings {
-            period: options.period,
-            origin,
-        },
+        Some(options.period),
         kernel,
-        Box::new(lift),
+        lift,
     )
     .unwrap();
 

@@ -1,6 +1,7 @@
 //! One whole kernel session on the target: grasp, estimate, validate,
 //! manipulate, against the reference plant, through the same
-//! `limb_sim::session::run` loop as `limb run` on the host.
+//! `limb_session::run` loop as `limb run` on the host (and every robot
+//! adapter).
 //!
 //! Prints (semihosting) the session's canonical digest — the event lines,
 //! the exact model, the step counts and the command hash, the text of
@@ -23,9 +24,10 @@ use cortex_m_semihosting::{debug, hprintln};
 use limb_firmware::{count, stack};
 use limb_kernel::trace::TraceEvent;
 use limb_kernel::{Command, Kernel, KernelConfig, StateKind};
-use limb_sim::operator::SessionPlan;
-use limb_sim::session::{self, Digest, EventLine, Observer};
-use limb_sim::{Measurement, Plant, PlantParameters};
+use limb_session::digest::{Digest, EventLine};
+use limb_session::{Frame, Observer, Operator, SessionPlan};
+use limb_sim::robot::ReferenceRobot;
+use limb_sim::{Plant, PlantParameters};
 
 /// The firmware has no heap: every allocation fails, and a failed
 /// allocation ends the run with failure. The plant crate links `alloc` for
@@ -46,7 +48,7 @@ unsafe impl GlobalAlloc for NoHeap {
 static HEAP: NoHeap = NoHeap;
 
 /// The stack a whole session may use [bytes]: the check fails past it.
-/// Measured 7 340 B (benchmarks/target.md): 12 KiB leaves 60 % for
+/// Measured 8 860 B (benchmarks/target.md): 12 KiB leaves 39 % for
 /// growth, and a change that puts a kernel-sized value (235 kB) or a deep
 /// recursion on the stack fails the check.
 const STACK_BUDGET: usize = 12 * 1024;
@@ -95,14 +97,20 @@ impl Meter {
     }
 }
 
-impl Observer<Plant> for Meter {
+impl Observer<ReferenceRobot<Plant>> for Meter {
     #[inline(always)]
-    fn before_step(&mut self, _: &Plant, _: &Measurement, _: StateKind) {
+    fn before_step(&mut self, _: &ReferenceRobot<Plant>, _: &Frame, _: StateKind) {
         self.started = count::now();
     }
 
     #[inline(always)]
-    fn after_step(&mut self, _: &Plant, _: &Measurement, state: StateKind, command: &Command) {
+    fn after_step(
+        &mut self,
+        _: &ReferenceRobot<Plant>,
+        _: &Frame,
+        state: StateKind,
+        command: &Command,
+    ) {
         let ticks = count::now() - self.started;
         let instructions = self.instructions(ticks);
         let concluding = state == StateKind::Estimate && command.state == StateKind::Validated;
@@ -133,7 +141,7 @@ fn main() -> ! {
 
     // `limb run`'s defaults: l1 = 0.30 m, l2 = 0.20 m, noise seed 1.
     let params = PlantParameters::new(0.30, 0.20);
-    let Ok(mut plant) = Plant::new(params) else {
+    let Ok(plant) = Plant::new(params) else {
         fail("plant parameters")
     };
     // SAFETY: main runs once; this is the only reference to KERNEL.
@@ -153,7 +161,9 @@ fn main() -> ! {
         calibration,
         started: 0,
     };
-    let outcome = session::run(kernel, &mut plant, &SessionPlan::default(), &mut meter);
+    let plan = SessionPlan::default();
+    let mut robot = ReferenceRobot::new(plant, plan.rate, plan.timeout);
+    let Ok(outcome) = limb_session::run(kernel, &mut robot, &mut Operator::new(plan), &mut meter);
     hprintln!("{}", Digest(&outcome));
 
     hprintln!(

@@ -73,6 +73,18 @@ pub enum CircleFitError {
     NonFinite,
 }
 
+impl CircleFitError {
+    /// Stable numeric code of the error.
+    pub const fn code(&self) -> u16 {
+        match self {
+            CircleFitError::TooFewPoints => 1,
+            CircleFitError::TooManyPoints => 2,
+            CircleFitError::Degenerate => 3,
+            CircleFitError::NonFinite => 4,
+        }
+    }
+}
+
 /// Mean-centred moments of a point set (Chernov's notation, with
 /// w = x² + z² of the centred coordinates) [m^k].
 struct Moments {

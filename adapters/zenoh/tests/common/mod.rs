@@ -4,11 +4,12 @@
 // Each test crate uses its own subset of these helpers.
 #![allow(dead_code)]
 
-use limb_kernel::Kernel;
+pub mod lift;
+
+use lift::Lift;
 use limb_zenoh::auth::CommandKey;
 use limb_zenoh::link::{LinkSettings, LivenessPolicy, OnSupervisorLoss, SampleQos};
-use limb_zenoh::node::{LoopSettings, Node};
-use limb_zenoh::sensor::ScriptedLift;
+use limb_zenoh::node::Node;
 use limb_zenoh::session::{free_loopback_port, peer_config};
 use limb_zenoh::supervisor::Supervisor;
 use limb_zenoh::wire::WireFormat;
@@ -69,11 +70,11 @@ pub fn link_settings(options: &RigOptions) -> LinkSettings {
 /// A node (in Validated after the scripted lift, or in Grasp) and a
 /// connected supervisor whose commands are routed.
 pub fn rig(options: RigOptions) -> Rig {
-    let lift = ScriptedLift::reference();
-    let (kernel, origin): (Box<Kernel>, f64) = if options.validated {
+    let lift = Lift::reference().stepping(options.period);
+    let (kernel, lift) = if options.validated {
         lift.kernel_after_lift()
     } else {
-        (lift.kernel_in_grasp(), 0.0)
+        (lift.kernel_in_grasp(), lift)
     };
     let port = free_loopback_port().unwrap();
     let endpoint = format!("tcp/127.0.0.1:{port}");
@@ -81,12 +82,9 @@ pub fn rig(options: RigOptions) -> Rig {
     let node = Node::spawn(
         peer_config(std::slice::from_ref(&endpoint), &[], 1000).unwrap(),
         &settings,
-        LoopSettings {
-            period: options.period,
-            origin,
-        },
+        Some(options.period),
         kernel,
-        Box::new(lift),
+        lift,
     )
     .unwrap();
     let supervisor = connect(&endpoint, options.format, key());

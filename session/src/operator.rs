@@ -1,22 +1,25 @@
-//! The operator of a closed-loop session: the requests a person makes of
-//! the kernel while it runs on a robot (the reference plant in `limb run`,
-//! a KUKA arm behind FRI in `limb kuka run`).
+//! The scripted operator of a session: the requests a person makes of the
+//! kernel while it runs on a robot (the reference plant in `limb run` and
+//! the firmware, a KUKA arm behind FRI in `limb kuka run`), as a
+//! [`Supervisor`].
 //!
 //! Theory of operation: once per kernel step, [`Operator::request`] looks
 //! at the kernel's state and time and returns at most one request: start
 //! the estimation once the grasp has settled, approve the manipulation
 //! target once the kernel is in Validated, finish once the target has been
 //! held still for [`SessionPlan::hold`]. [`Operator::observe`] records each
-//! step's command (the stillness test needs it). [`describe`] puts a trace
-//! event into words; [`FittedModel`] is the validated arm in numbers.
+//! step's command (the stillness test needs it). The operator asks only
+//! while the robot follows commands, and ends the session when it
+//! completes or stops ([`Operator::continuing`] leaves that to the robot). [`Described`] puts a trace event into words;
+//! [`FittedModel`] is the validated arm in numbers.
 
-use alloc::string::{String, ToString};
+use crate::supervisor::Supervisor;
 use core::fmt;
 use limb_kernel::arm::JointAngles;
 use limb_kernel::geometry::Point;
 use limb_kernel::trace::{Cause, Event, TraceEvent};
 use limb_kernel::validate::ValidatedArm;
-use limb_kernel::{Command, Request, StateKind};
+use limb_kernel::{Command, Kernel, PathSample, Request, StateKind};
 
 /// How the session is run.
 #[derive(Clone, Copy, Debug)]
@@ -82,10 +85,12 @@ pub struct Operator {
     asked_approve: bool,
     reached_target_at: Option<f64>,
     last: Option<Command>,
+    ends_session: bool,
 }
 
 impl Operator {
-    /// An operator following `plan`.
+    /// An operator following `plan` who ends the session when it
+    /// completes or stops.
     pub fn new(plan: SessionPlan) -> Self {
         Self {
             plan,
@@ -93,6 +98,17 @@ impl Operator {
             asked_approve: false,
             reached_target_at: None,
             last: None,
+            ends_session: true,
+        }
+    }
+
+    /// An operator following `plan` who leaves the end of the session to
+    /// the robot (a real robot keeps being answered, holding, after the
+    /// session completed or stopped).
+    pub fn continuing(plan: SessionPlan) -> Self {
+        Self {
+            ends_session: false,
+            ..Self::new(plan)
         }
     }
 
@@ -134,7 +150,28 @@ impl Operator {
     }
 }
 
+impl Supervisor for Operator {
+    fn before_step(&mut self, kernel: &mut Kernel, now: f64, following: bool) {
+        if !following {
+            return;
+        }
+        if let Some(request) = self.request(kernel.state().kind(), now) {
+            // A refusal is recorded in the trace and shown as an event.
+            let _ = kernel.request(request, now);
+        }
+    }
+
+    fn after_step(&mut self, _: &Kernel, _: &PathSample, command: &Command, _: f64) {
+        self.observe(*command);
+    }
+
+    fn finished(&self, state: StateKind, completed: bool) -> bool {
+        self.ends_session && (completed || state == StateKind::SafeStop)
+    }
+}
+
 /// A trace event in words.
+#[cfg(feature = "std")]
 pub fn describe(event: &TraceEvent) -> String {
     Described(event).to_string()
 }

@@ -1,0 +1,198 @@
+//! AREBO as the robot of a `limb-session` session, over a real
+//! pseudo-terminal with the simulated device: the device's own clock and
+//! status bits reach the kernel and its watchdog decides. The person holds
+//! still (the device's shoulder joint model at a fixed pose); the kernel
+//! holds in Grasp until a fault.
+
+use limb_arebo::control::GravityParameters;
+use limb_arebo::human::ShoulderAngles;
+use limb_arebo::link::{self, DeviceFault, FaultSwitch, Session};
+use limb_arebo::robot::{on_simulated_held_arm, AreboRobot, AreboStop};
+use limb_arebo::safety::{AreboLimit, SafetyLimits};
+use limb_arebo::sim::{Setup, SAMPLE_PERIOD};
+use limb_kernel::trace::TraceEvent;
+use limb_kernel::{Kernel, KernelConfig, StateKind};
+use limb_session::operator::describe;
+use limb_session::{Observer, Operator, Outcome, SessionPlan, Supervisor};
+use std::time::Duration;
+
+/// Frames the device streams at most (one per 5 ms of real time).
+const FRAMES: usize = 2_000;
+/// The step at which the test's action happens.
+const ACT_AT: u64 = 100;
+
+/// A supervisor that requests nothing, does `action` once at step
+/// [`ACT_AT`] and is finished when the kernel stops.
+struct Bystander<F: FnMut()> {
+    steps: u64,
+    action: F,
+    acted_at: Option<f64>,
+}
+
+impl<F: FnMut()> Supervisor for Bystander<F> {
+    fn before_step(&mut self, _: &mut Kernel, now: f64, _: bool) {
+        self.steps += 1;
+        if self.steps == ACT_AT {
+            (self.action)();
+            self.acted_at = Some(now);
+        }
+    }
+
+    fn finished(&self, state: StateKind, _: bool) -> bool {
+        state == StateKind::SafeStop
+    }
+}
+
+/// The kernel's events.
+#[derive(Default)]
+struct Events(Vec<TraceEvent>);
+
+impl<R: ?Sized> Observer<R> for Events {
+    fn event(&mut self, event: &TraceEvent) {
+        self.0.push(*event);
+    }
+}
+
+/// A device holding the person still, in real time, showing `faults`, and
+/// AREBO in torque mode on it, on the host's clock. The link's own
+/// freshness check is set past the kernel's sensor-age limit
+/// (`judged_by_kernel`): the kernel's watchdog decides.
+fn robot(faults: FaultSwitch) -> (std::thread::JoinHandle<link::DeviceRecord>, AreboRobot) {
+    let pty = link::pseudo_terminal().unwrap();
+    let still = Box::new(|_: f64| {
+        let pose = ShoulderAngles {
+            flexion: 0.5,
+            abduction: 0.0,
+        };
+        (pose, [0.0; 2])
+    });
+    let device = link::spawn_device(
+        pty.device.try_clone_native().unwrap(),
+        Setup::default(),
+        still,
+        FRAMES,
+        Duration::from_secs_f64(SAMPLE_PERIOD),
+        faults,
+    )
+    .unwrap();
+    let session = Session::open(&pty.path, SafetyLimits::judged_by_kernel()).unwrap();
+    let robot = AreboRobot::start(session, 0.0, GravityParameters::ASSUMED, None).unwrap();
+    (device, robot)
+}
+
+/// The kernel, its sensor-age limit at its ceiling (0.1 s, 20 device
+/// frames) so that a loaded test machine's read jitter is not a stale
+/// frame.
+fn kernel() -> Box<Kernel> {
+    let mut config = KernelConfig::default();
+    config.limits.max_sensor_age = 0.1;
+    Box::new(Kernel::new(config).unwrap())
+}
+
+/// Runs a session that does `action` at step [`ACT_AT`]: its outcome (or
+/// stop), the kernel time of the action, the events.
+fn session(
+    faults: FaultSwitch,
+    action: impl FnMut(),
+) -> (Result<Outcome, AreboStop>, Option<f64>, Vec<TraceEvent>) {
+    let (device, mut robot) = robot(faults);
+    let mut kernel = kernel();
+    let mut bystander = Bystander {
+        steps: 0,
+        action,
+        acted_at: None,
+    };
+    let mut events = Events::default();
+    let outcome = limb_session::run(&mut kernel, &mut robot, &mut bystander, &mut events);
+    robot.switch_off();
+    drop(robot);
+    let _ = device.join();
+    (outcome, bystander.acted_at, events.0)
+}
+
+/// The kernel stopped on `cause` after `acted_at`, and not before.
+fn stopped_after(events: &[TraceEvent], acted_at: Option<f64>, cause: &str) {
+    let acted_at = acted_at.expect("the action happened");
+    let stops: Vec<_> = events
+        .iter()
+        .filter(|e| describe(e).contains("→ SafeStop"))
+        .collect();
+    assert_eq!(stops.len(), 1, "{events:?}");
+    let stop = stops[0];
+    assert!(describe(stop).contains(cause), "{}", describe(stop));
+    assert!(stop.time >= acted_at, "{stop:?} before {acted_at}");
+}
+
+/// REQ-ADP-002: The device's heartbeat-missing bit (it has stopped assisting) ends the
+/// session with that named verdict, motors off.
+#[test]
+fn a_device_error_bit_stops_the_session_by_name() {
+    let faults = FaultSwitch::default();
+    let switch = faults.clone();
+    let (outcome, acted_at, _) = session(faults, move || switch.set(DeviceFault::HeartbeatLost));
+    assert!(acted_at.is_some());
+    let stop = outcome.expect_err("the device error ends the session");
+    let violation = stop.violation().expect("a named verdict");
+    assert_eq!(
+        violation.limit,
+        AreboLimit::DeviceHeartbeatMissing,
+        "{stop}"
+    );
+}
+
+/// REQ-ADP-002: A device whose run time stops while it keeps streaming: its frames age
+/// against the session clock, and the kernel's watchdog stops on a stale
+/// sensor.
+#[test]
+fn a_frozen_device_clock_is_a_stale_sensor_for_the_kernel() {
+    let faults = FaultSwitch::default();
+    let switch = faults.clone();
+    let (outcome, acted_at, events) = session(faults, move || switch.set(DeviceFault::FrozenClock));
+    let outcome = outcome.unwrap();
+    assert_eq!(outcome.final_state, StateKind::SafeStop);
+    stopped_after(&events, acted_at, "StaleSensor");
+}
+
+/// REQ-ADP-002: The host stalls 0.3 s (the device keeps streaming into the pty): the
+/// backlog it then reads is as old as the device's clock says, and the
+/// kernel's watchdog stops on a stale sensor.
+#[test]
+fn a_backlog_after_a_host_stall_is_a_stale_sensor_for_the_kernel() {
+    let (outcome, acted_at, events) = session(FaultSwitch::default(), || {
+        std::thread::sleep(Duration::from_millis(300));
+    });
+    let outcome = outcome.unwrap();
+    assert_eq!(outcome.final_state, StateKind::SafeStop);
+    stopped_after(&events, acted_at, "StaleSensor");
+}
+
+/// The scripted operator's whole session on the held arm: Grasp →
+/// Estimate → Validated → Manipulate → Validated, the arm found again.
+#[test]
+fn a_scripted_session_on_the_held_arm_validates_and_manipulates() {
+    let (device, mut robot) = on_simulated_held_arm(8_000).unwrap();
+    let mut kernel = kernel();
+    let plan = SessionPlan {
+        rate: 1.0 / SAMPLE_PERIOD,
+        ..SessionPlan::default()
+    };
+    let mut events = Events::default();
+    let outcome = limb_session::run(
+        &mut kernel,
+        &mut robot,
+        &mut Operator::new(plan),
+        &mut events,
+    )
+    .unwrap();
+    robot.switch_off();
+    drop(robot);
+    let _ = device.join();
+    for event in &events.0 {
+        eprintln!("{:.3} {}", event.time, describe(event));
+    }
+    eprintln!("{outcome:?}");
+    assert!(outcome.completed, "{outcome:?}");
+    let model = outcome.model.unwrap();
+    assert!((model.upper_arm_length - 0.30).abs() < 5e-3, "{model:?}");
+    assert!((model.forearm_length - 0.20).abs() < 5e-3, "{model:?}");
+}

@@ -1,0 +1,430 @@
+//! `limb soak kuka`: the FRI client with the kernel inside (an
+//! [`limb_kuka::robot::FriRobot`] in a `limb-session` session, as `limb kuka
+//! run`) against the simulated controller (`limb kuka sim-controller`), paced
+//! at 1 kHz, over real UDP on loopback ([`limb_kuka::loopback`]).
+//!
+//! Each session starts from Grasp under the scripted operator and ends when
+//! it completes a manipulation or stops. A seeded draw picks one fault of
+//! [`CASES`] (or none) and a controller cycle to inject it at, anywhere in
+//! a whole session's length; a fault ends the session in its named stop
+//! (the limb-kuka README's fault table), or is ridden through. Faults that
+//! stop the kernel only because the robot stops following ("request Stop")
+//! do so only while the kernel moves the arm; injected in Grasp or
+//! Validated they may be ridden through.
+
+use super::{first_stop, log_rows, Budget, Ledger, LineCount, MemoryWatch, Soak};
+use crate::error::CliError;
+use limb_kernel::trace::{Event, TraceEvent};
+use limb_kernel::{KernelConfig, StateKind};
+use limb_kuka::faults::{FaultKind, FaultSchedule, ScheduledFault};
+use limb_kuka::loopback::run_loopback_observed;
+use limb_kuka::messages::SessionState;
+use limb_kuka::robot::FriRobot;
+use limb_kuka::sim_controller::{Pacing, SimSettings};
+use limb_kuka::FriVersion;
+use limb_session::log::SessionLog;
+use limb_session::operator::completes_session;
+use limb_session::{Observer, Operator, SessionPlan};
+use limb_sim::noise::Gaussian;
+use limb_sim::PlantParameters;
+use serde_json::{json, Value};
+use std::collections::BTreeMap;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+
+/// Controller cycles of a whole fault-free session at 1 kHz (settle, the
+/// estimation motion, approval, the manipulation and its 1 s hold: about
+/// 26 400): the range a fault's start is drawn from.
+const SESSION_CYCLES: u64 = 27_000;
+/// Cycles after a ridden-through fault's window within which a stop is
+/// still blamed on it.
+const AFTERMATH: u64 = 200;
+
+/// What a fault must end in.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Expect {
+    /// The session goes on (no stop during the window and its aftermath).
+    RideThrough,
+    /// SafeStop with this cause, whatever the kernel was doing.
+    Stop(&'static str),
+    /// SafeStop by `request Stop` (the robot stopped following) when the
+    /// kernel was moving the arm at injection; otherwise either that or
+    /// riding through.
+    StopWhileMoving,
+}
+
+/// One fault the soak injects.
+struct Case {
+    kind: FaultKind,
+    cycles: u64,
+    expect: Expect,
+}
+
+const STALE: Expect = Expect::Stop("StaleSensor");
+const UNFOLLOWED: Expect = Expect::StopWhileMoving;
+
+/// The faults, with the windows of the limb-kuka README's fault table.
+const CASES: [Case; 13] = [
+    case(FaultKind::RandomLoss(0.01), 800, Expect::RideThrough),
+    case(FaultKind::BurstLoss, 50, STALE),
+    case(FaultKind::Delay(2), 300, UNFOLLOWED),
+    case(FaultKind::Duplicate, 100, Expect::RideThrough),
+    case(FaultKind::Reorder, 8, Expect::RideThrough),
+    case(FaultKind::CounterJump(5000), 1, Expect::RideThrough),
+    case(FaultKind::PoorQuality, 30, UNFOLLOWED),
+    case(FaultKind::Idle, 50, UNFOLLOWED),
+    case(FaultKind::Garbage, 100, Expect::RideThrough),
+    case(FaultKind::WrongCrc, 5, Expect::RideThrough),
+    case(
+        FaultKind::ClockBack(5),
+        1000,
+        Expect::Stop("SensorTimeReversed"),
+    ),
+    case(FaultKind::ClockStall, 1000, STALE),
+    case(FaultKind::ClockRepeat, 1000, STALE),
+];
+
+const fn case(kind: FaultKind, cycles: u64, expect: Expect) -> Case {
+    Case {
+        kind,
+        cycles,
+        expect,
+    }
+}
+
+/// The fault's name in the schedule text (`burst-loss`).
+fn fault_name(fault: &ScheduledFault) -> String {
+    let text = fault.to_string();
+    text.split('@').next().unwrap_or_default().to_string()
+}
+
+/// Marks the end of the session (completed or stopped) for the
+/// controller's thread, which then stops cycling.
+struct EndWatch(Arc<AtomicBool>);
+
+impl Observer<FriRobot> for EndWatch {
+    fn event(&mut self, event: &TraceEvent) {
+        let stops = matches!(
+            event.event,
+            Event::Transition {
+                to: StateKind::SafeStop,
+                ..
+            }
+        );
+        if stops || completes_session(event) {
+            self.0.store(true, Ordering::Release);
+        }
+    }
+}
+
+/// What one session showed.
+struct Session {
+    fault: Option<ScheduledFault>,
+    expect: Option<Expect>,
+    /// Kernel state just before the fault's window opened (`None`: not
+    /// reached).
+    state_at_fault: Option<StateKind>,
+    /// Controller cycle when the session was seen to end.
+    ended_at: Option<u64>,
+    stop: Option<String>,
+    completed: bool,
+    record: Value,
+    rows: u64,
+    steps: u64,
+    stale_steps: u64,
+    missed: u64,
+    unaccounted_cycles: i64,
+}
+
+/// How a session's fault ended, judged against what it must end in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+enum Verdict {
+    /// Ended as named.
+    AsNamed,
+    /// Not reached: the session completed or stopped first, or the soak
+    /// ended.
+    NotReached,
+    /// Ended otherwise: a defect, or a stop the machine's load caused
+    /// (a StaleSensor stop outside the fault's doing).
+    Otherwise,
+}
+
+impl Session {
+    fn verdict(&self) -> Option<Verdict> {
+        let fault = self.fault?;
+        let expect = self.expect?;
+        let Some(state) = self.state_at_fault else {
+            return Some(Verdict::NotReached);
+        };
+        let stopped_in_window = self
+            .ended_at
+            .is_some_and(|end| end <= fault.start + fault.cycles + AFTERMATH)
+            && self.stop.is_some();
+        let ok = match expect {
+            Expect::RideThrough => !stopped_in_window,
+            Expect::Stop(name) => self.stop.as_deref() == Some(name),
+            Expect::StopWhileMoving => {
+                let asked = self.stop.as_deref() == Some("request Stop");
+                let moving = matches!(state, StateKind::Estimate | StateKind::Manipulate);
+                asked || (!moving && !stopped_in_window)
+            }
+        };
+        Some(if ok {
+            Verdict::AsNamed
+        } else {
+            Verdict::Otherwise
+        })
+    }
+
+    /// The session's record: its outcome and counts.
+    fn json(&self) -> Value {
+        let mut record = json!({
+            "fault": self.fault.map(|f| f.to_string()),
+            "expect": self.expect.map(|e| format!("{e:?}")),
+            "state_at_fault": self.state_at_fault.map(|s| format!("{s:?}")),
+            "ended_at_cycle": self.ended_at,
+            "stop": self.stop,
+            "completed": self.completed,
+            "verdict": self.verdict().map(|v| format!("{v:?}")),
+            "log_rows": self.rows,
+            "kernel_steps": self.steps,
+            "stale_steps": self.stale_steps,
+            "unaccounted_cycles": self.unaccounted_cycles,
+        });
+        if let (Value::Object(fields), Value::Object(counts)) = (&mut record, &self.record) {
+            fields.extend(counts.iter().map(|(k, v)| (k.clone(), v.clone())));
+        }
+        record
+    }
+}
+
+/// One session: fault `case` (or none) at `start`, until it ends or
+/// `budget` is spent.
+fn session(
+    options: &Options,
+    budget: &Budget,
+    seed: u64,
+    case: Option<&Case>,
+    start: u64,
+) -> Result<Session, CliError> {
+    let fault = case.map(|case| ScheduledFault {
+        start,
+        cycles: case.cycles,
+        kind: case.kind,
+    });
+    let mut settings = SimSettings::new(options.version);
+    settings.pacing = if options.unpaced {
+        Pacing::AsFastAsPossible
+    } else {
+        Pacing::RealTime
+    };
+    settings.send_period_ms = 1;
+    settings.faults = FaultSchedule::new(fault.into_iter().collect(), seed);
+    let mut plant = PlantParameters::new(0.30, 0.20);
+    plant.seed = seed;
+    let ended = Arc::new(AtomicBool::new(false));
+    let observer = (
+        SessionLog::new(LineCount::default()),
+        EndWatch(Arc::clone(&ended)),
+    );
+    let mut state_at_fault = None;
+    let mut ended_at = None;
+    let (run, (log, _)) = run_loopback_observed(
+        settings,
+        plant,
+        KernelConfig::default(),
+        Operator::new(SessionPlan::default()),
+        observer,
+        u64::MAX,
+        |sim, state| {
+            let cycle = sim.stats().cycles;
+            if fault.is_some_and(|f| f.start == cycle) {
+                state_at_fault = Some(state);
+            }
+            let over = ended.load(Ordering::Acquire);
+            if over {
+                ended_at = Some(cycle);
+            }
+            let cut = options.session_cycles.is_some_and(|n| {
+                cycle >= fault.map_or(n, |f| n.max(f.start + f.cycles + AFTERMATH))
+            });
+            over || cut || budget.spent()
+        },
+    )
+    .map_err(|error| CliError::Internal(format!("KUKA loopback: {error}")))?;
+    let stats = run.sim.stats();
+    let client = run.robot.record().client;
+    let idle = stats.state_cycles[SessionState::Idle as usize];
+    let answered = stats.replies_on_time + stats.missed_cycles + idle;
+    let unaccounted_cycles = stats.cycles as i64 - answered as i64;
+    Ok(Session {
+        fault,
+        expect: case.map(|c| c.expect),
+        state_at_fault,
+        ended_at,
+        stop: first_stop(&run.events),
+        completed: run.outcome.completed,
+        record: json!({
+            "cycles": stats.cycles,
+            "datagrams_sent": stats.datagrams_sent,
+            "datagrams_dropped": stats.datagrams_dropped,
+            "replies_on_time": stats.replies_on_time,
+            "missed_cycles": stats.missed_cycles,
+            "missed_with_delivery": stats.missed_with_delivery,
+            "idle_cycles": idle,
+            "stray_replies": stats.stray_replies,
+            "non_finite_replies": stats.non_finite_replies,
+            "client_handled": client.handled,
+            "client_answered": client.answered,
+            "client_rejected": client.rejected,
+            "client_timeouts": client.timeouts,
+            "client_duplicates": client.duplicates,
+            "client_stale": client.stale_datagrams,
+        }),
+        rows: log_rows(log)?,
+        steps: run.outcome.steps,
+        stale_steps: run.outcome.stale_steps,
+        missed: stats.missed_cycles,
+        unaccounted_cycles,
+    })
+}
+
+/// How the KUKA soak runs.
+pub struct Options {
+    /// Wire version.
+    pub version: FriVersion,
+    /// The controller runs as fast as the client answers and the session's
+    /// clock is the robot's (as `tests/faults.rs`): every outcome is
+    /// independent of the machine's speed and load, but a robot clock that
+    /// stalls or repeats is not seen (those faults are left out).
+    pub unpaced: bool,
+    /// Cut each session after this many controller cycles (faults start
+    /// within them; a session with a fault runs until its window and
+    /// aftermath have passed): short sessions for a slow build.
+    pub session_cycles: Option<u64>,
+}
+
+/// True when `case` can be judged under `options`.
+fn applies(case: &Case, options: &Options) -> bool {
+    let clock_only = matches!(case.kind, FaultKind::ClockStall | FaultKind::ClockRepeat);
+    (options.version == FriVersion::V2_7 || case.kind != FaultKind::WrongCrc)
+        && !(options.unpaced && clock_only)
+}
+
+/// Runs sessions until `budget` is spent.
+pub fn soak(budget: &Budget, seed: u64, options: &Options) -> Result<Soak, CliError> {
+    let mut draws = Gaussian::new(seed);
+    let mut memory = MemoryWatch::default();
+    let mut judge = Judge {
+        unpaced: options.unpaced,
+        ..Judge::default()
+    };
+    let cases: Vec<&Case> = CASES.iter().filter(|c| applies(c, options)).collect();
+    for index in 0.. {
+        if budget.spent() {
+            break;
+        }
+        // One draw in (cases + 1): no fault.
+        let pick = (draws.uniform() * (cases.len() + 1) as f64) as usize;
+        // Paced, within the time left (a 1 ms cycle).
+        let left = if options.unpaced {
+            SESSION_CYCLES
+        } else {
+            (budget.left().as_secs_f64() * 1000.0) as u64
+        };
+        let length = options.session_cycles.unwrap_or(SESSION_CYCLES);
+        let start = 1 + (draws.uniform() * length.min(left) as f64) as u64;
+        let session_seed = seed.wrapping_mul(1000).wrapping_add(index as u64);
+        let case = cases.get(pick).copied();
+        judge.add(index, &session(options, budget, session_seed, case, start)?);
+        memory.after_session(budget);
+    }
+    Ok(judge.finish(&memory))
+}
+
+/// Stops the machine's load can cause when paced: a late frame
+/// (StaleSensor), or missed replies that make the robot stop following
+/// (request Stop).
+fn load_can_cause(stop: &str) -> bool {
+    matches!(stop, "StaleSensor" | "request Stop")
+}
+
+/// The verdicts so far.
+#[derive(Default)]
+struct Judge {
+    unpaced: bool,
+    ledger: Ledger,
+    by_fault: BTreeMap<String, BTreeMap<String, u64>>,
+    unprovoked: BTreeMap<String, u64>,
+    load_suspected: u64,
+    completed: u64,
+    fault_free_cycles: u64,
+    fault_free_missed: u64,
+}
+
+impl Judge {
+    fn add(&mut self, index: usize, s: &Session) {
+        if s.rows + s.stale_steps != s.steps {
+            self.ledger.lose(format!(
+                "session {index}: {} log rows + {} stale steps for {} kernel steps",
+                s.rows, s.stale_steps, s.steps
+            ));
+        }
+        if s.unaccounted_cycles != 0 {
+            self.ledger.lose(format!(
+                "session {index}: {} controller cycles neither answered, missed nor IDLE",
+                s.unaccounted_cycles
+            ));
+        }
+        let name = s.fault.as_ref().map_or("none".to_string(), fault_name);
+        let entry = self.by_fault.entry(name.clone()).or_default();
+        *entry.entry("sessions".into()).or_default() += 1;
+        let outcome = match (&s.stop, s.completed) {
+            (Some(stop), _) => stop.clone(),
+            (None, true) => "completed".into(),
+            (None, false) => "cut (session length or soak's end)".into(),
+        };
+        *entry.entry(format!("ended: {outcome}")).or_default() += 1;
+        let verdict = s.verdict();
+        if let Some(verdict) = verdict {
+            *entry.entry(format!("{verdict:?}")).or_default() += 1;
+        }
+        // A stop the fault did not make: before its window, or without one.
+        let unmade = matches!(verdict, None | Some(Verdict::NotReached));
+        let wrong = verdict == Some(Verdict::Otherwise);
+        if let Some(stop) = s.stop.as_ref().filter(|_| unmade || wrong) {
+            if unmade {
+                *self.unprovoked.entry(stop.clone()).or_default() += 1;
+            }
+            if !self.unpaced && load_can_cause(stop) {
+                self.load_suspected += 1;
+            } else {
+                let injected = s.state_at_fault.map_or("not injected".into(), |state| {
+                    format!("injected in {state:?}")
+                });
+                let expected = s.expect.map_or("no stop".into(), |e| format!("{e:?}"));
+                self.ledger.lose(format!(
+                    "session {index}: fault {name} ({injected}) ended in {outcome}, expected {expected}"
+                ));
+            }
+        }
+        self.completed += u64::from(s.completed);
+        if s.fault.is_none() {
+            self.fault_free_cycles += s.record["cycles"].as_u64().unwrap_or(0);
+            self.fault_free_missed += s.missed;
+        }
+        self.ledger.add(s.json());
+    }
+
+    fn finish(self, memory: &MemoryWatch) -> Soak {
+        let figures = json!({
+            "completed_sessions": self.completed,
+            "missed_cycles_fault_free_sessions": self.fault_free_missed,
+            "cycles_fault_free_sessions": self.fault_free_cycles,
+            "faults": self.by_fault,
+            "stops_not_caused_by_an_injected_fault": self.unprovoked,
+            "stops_the_load_can_cause_not_made_by_their_fault": self.load_suspected,
+        });
+        self.ledger.finish("kuka", figures, memory)
+    }
+}

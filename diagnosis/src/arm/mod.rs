@@ -1,0 +1,902 @@
+//! The arm plant of `plant.md` as a diagnosis [`Model`]: the reference
+//! plant (`limb-sim`) with every parameter at its default but the arm
+//! lengths is the sim; a log in the plant.md format is the real data.
+//!
+//! # The arm is fitted, not given
+//! The arm lengths l1, l2 are the model's own fitted parameters (the
+//! engine's [`Model::base`], as mass and offset are for a drive): fitted
+//! first, on the nominal sim, and refitted with every effect, so the arm
+//! the diagnosis reports is the arm corrected for the effects it found.
+//! The search starts at the kernel's own estimate on the same log
+//! (`Method::Auto`, what `limb estimate` reports) and spans
+//! [`LENGTH_REACH`] around it. Lengths that are given are held fixed.
+//!
+//! # Alignment
+//! The sim is driven by the log's own commanded set-point (`xd, zd,
+//! psid`, see [`replay`]), so any logged motion can be compared; each log
+//! sample is compared with the sim at the integration step nearest its
+//! time stamp. Ground-truth columns are never read.
+//!
+//! # Predictions
+//! The nominal sim is run once per arm (noise off; the last few arms are
+//! kept), keeping what the robot senses at every 0.5 ms step.
+//! Measurement-side effects (`backlash`, `quantization`, `latency`,
+//! `grasp_compliance`, `plane_tilt`) are then applied to that record in
+//! the plant's own order (compliance and tilt, delay, backlash, rounding),
+//! which costs microseconds; dynamics-side effects (`joint_friction`,
+//! `mass_mismatch`, `shoulder_drift`, `active_torque`, `grasp_slip`)
+//! re-run the plant with the effect. Quantization is predicted as the
+//! *expected* rounded reading E[round((v + n) / step) · step] over the
+//! measurement noise n, since the real sensor rounds its noisy reading.
+
+pub mod replay;
+
+use crate::model::{
+    grid, Applied, Candidate, Data, Hints, Model, ModelError, Parameter, Scale, Series, Signal,
+};
+use limb_kernel::estimation::{estimate_arm, Method};
+use limb_kernel::motion::SetPoint;
+use limb_kernel::path::{is_due, PathSample, PATH_CAPACITY};
+use limb_sim::effects::{descriptor, Effect, Effects, Quantization};
+use limb_sim::log::Record;
+use limb_sim::{
+    Measurement, Plant, PlantParameters, ANGLE_NOISE, FORCE_NOISE, POSITION_NOISE, STEP,
+    TORQUE_NOISE,
+};
+use replay::Replay;
+use std::sync::{Arc, Mutex};
+use thiserror::Error;
+
+/// Longest log the model accepts [s]: the motion plus a minute of hold
+/// bounds the simulation work.
+pub const LONGEST_LOG: f64 = 90.0;
+
+/// Why a log cannot be compared with the sim.
+#[derive(Clone, Debug, PartialEq, Error)]
+pub enum ArmError {
+    /// Arm lengths not finite and positive.
+    #[error("arm lengths must be finite and positive: {0}")]
+    Arm(String),
+    /// No samples.
+    #[error("the log has no samples")]
+    Empty,
+    /// The log's first row has no commanded set-point: nothing says where
+    /// the robot was sent, so the motion cannot be replayed.
+    #[error("no commanded pose at t = {time} s (column {column} missing or empty): the commanded motion cannot be replayed")]
+    NoCommand {
+        /// The set-point column missing.
+        column: &'static str,
+        /// Time of the row [s].
+        time: f64,
+    },
+    /// Time stamps outside [0, LONGEST_LOG] or two in one integration step.
+    #[error("sample {sample}: time {time} s is outside [0, {LONGEST_LOG}] s or shares a 0.5 ms step with the sample before")]
+    Time {
+        /// 0-based sample.
+        sample: usize,
+        /// Its time [s].
+        time: f64,
+    },
+    /// The nominal sim failed.
+    #[error("the sim failed: {0}")]
+    Sim(String),
+}
+
+/// Sensed channels of one instant: x, z, psi, y, fx, fz, ty.
+type Sensed = [f64; 7];
+
+fn sensed(m: &Measurement) -> Sensed {
+    [
+        m.pose.x,
+        m.pose.z,
+        m.pose.psi,
+        m.lateral,
+        m.wrench.fx,
+        m.wrench.fz,
+        m.wrench.ty,
+    ]
+}
+
+const ALL_SIGNALS: [Signal; 7] = [
+    Signal {
+        name: "x",
+        unit: "m",
+    },
+    Signal {
+        name: "z",
+        unit: "m",
+    },
+    Signal {
+        name: "psi",
+        unit: "rad",
+    },
+    Signal {
+        name: "y",
+        unit: "m",
+    },
+    Signal {
+        name: "fx",
+        unit: "N",
+    },
+    Signal {
+        name: "fz",
+        unit: "N",
+    },
+    Signal {
+        name: "ty",
+        unit: "N m",
+    },
+];
+const ALL_SCALES: [f64; 7] = [
+    POSITION_NOISE,
+    POSITION_NOISE,
+    ANGLE_NOISE,
+    POSITION_NOISE,
+    FORCE_NOISE,
+    FORCE_NOISE,
+    TORQUE_NOISE,
+];
+/// Column of `y` in [`Sensed`] (dropped when the log has no `y`).
+const LATERAL: usize = 3;
+
+/// Effects that only change what is measured.
+const MEASUREMENT_SIDE: [&str; 5] = [
+    "backlash",
+    "quantization",
+    "latency",
+    "grasp_compliance",
+    "plane_tilt",
+];
+
+fn parameter(
+    name: &'static str,
+    unit: &'static str,
+    min: f64,
+    max: f64,
+    scale: Scale,
+) -> Parameter {
+    Parameter {
+        name,
+        unit,
+        min,
+        max,
+        scale,
+    }
+}
+
+/// The candidates with their search ranges: inside the effect's range of
+/// `limb_sim::effects::CATALOGUE`, logarithmic for quantities spanning
+/// decades, starting just above zero where zero means "no effect".
+/// `grasp_slip.at` spans the log (`duration` seconds).
+pub fn candidates(duration: f64) -> Vec<Candidate> {
+    use Scale::{Linear, Logarithmic};
+    let one = |name, parameters| Candidate { name, parameters };
+    vec![
+        one(
+            "joint_friction",
+            vec![
+                parameter("coulomb", "N m", 0.002, 5.0, Logarithmic),
+                parameter("viscous", "N m s/rad", 0.002, 5.0, Logarithmic),
+            ],
+        ),
+        one(
+            "backlash",
+            vec![parameter("width", "rad", 0.0005, 0.2, Logarithmic)],
+        ),
+        one(
+            "quantization",
+            vec![
+                parameter("pos", "m", 1e-5, 0.05, Logarithmic),
+                parameter("ang", "rad", 1e-4, 0.2, Logarithmic),
+            ],
+        ),
+        one(
+            "latency",
+            vec![parameter("delay", "s", 0.0005, 0.5, Logarithmic)],
+        ),
+        one(
+            "grasp_compliance",
+            vec![parameter("k", "N/m", 50.0, 1e6, Logarithmic)],
+        ),
+        one(
+            "mass_mismatch",
+            vec![parameter("factor", "1", 0.2, 5.0, Logarithmic)],
+        ),
+        one(
+            "plane_tilt",
+            vec![parameter("angle", "rad", -1.0, 1.0, Linear)],
+        ),
+        one(
+            "shoulder_drift",
+            vec![parameter("k", "N/m", 100.0, 1e6, Logarithmic)],
+        ),
+        one(
+            "active_torque",
+            vec![
+                parameter("amp", "N m", 0.005, 5.0, Logarithmic),
+                parameter("freq", "Hz", 0.05, 10.0, Logarithmic),
+            ],
+        ),
+        one(
+            "grasp_slip",
+            vec![
+                parameter("shift", "m", -0.05, 0.05, Linear),
+                parameter("at", "s", 0.0, duration.clamp(1.0, 60.0), Linear),
+            ],
+        ),
+    ]
+}
+
+/// How far around the kernel's estimate the fitted lengths are searched
+/// [m] (the estimate is within 12 mm on every withheld-effect log; plain
+/// circle fits can be 91 mm off on a compliant grasp).
+pub const LENGTH_REACH: f64 = 0.1;
+/// Range searched for each length when the kernel cannot estimate the
+/// arm from the log [m]: l1, then l2.
+const LENGTH_RANGES: [[f64; 2]; 2] = [[0.15, 0.5], [0.08, 0.35]];
+/// Shortest length searched [m].
+const SHORTEST: f64 = 0.05;
+/// Fitted lengths are snapped to this grid [m] (far below what any log
+/// resolves) so the same arm always finds its cached nominal record.
+const LENGTH_GRAIN: f64 = 1e-9;
+/// Nominal records kept (the arms most recently asked for).
+const CACHED_ARMS: usize = 6;
+/// Name of the base candidate: the arm's own lengths.
+pub const ARM: &str = "arm";
+
+/// The arm the sim is built with: lengths given by the user, or fitted.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Lengths {
+    /// Held fixed: l1, l2 [m].
+    Given(f64, f64),
+    /// Fitted with the effects, starting at the kernel's estimate.
+    Fitted,
+}
+
+/// The arm lengths' candidate (the engine's base): l1 and l2 searched
+/// around `start` (the kernel's estimate), or over [`LENGTH_RANGES`].
+pub fn arm_candidate(start: Option<(f64, f64)>) -> Candidate {
+    let range = |i: usize, centre: Option<f64>| match centre {
+        Some(c) => [(c - LENGTH_REACH).max(SHORTEST), c + LENGTH_REACH],
+        None => LENGTH_RANGES[i],
+    };
+    let [a, b] = range(0, start.map(|s| s.0));
+    let [c, d] = range(1, start.map(|s| s.1));
+    Candidate {
+        name: ARM,
+        parameters: vec![
+            parameter("l1", "m", a, b, Scale::Linear),
+            parameter("l2", "m", c, d, Scale::Linear),
+        ],
+    }
+}
+
+/// The kernel's own estimate of the arm from the log's measured path
+/// (what `limb estimate` reports with `auto`), when it has one: the
+/// samples the kernel would record, at most its path capacity.
+pub fn kernel_estimate(records: &[Record]) -> Option<(f64, f64)> {
+    let mut path: Vec<PathSample> = Vec::new();
+    for sample in records.iter().map(Record::path_sample) {
+        if path.len() < PATH_CAPACITY && is_due(path.last(), sample.time) {
+            path.push(sample);
+        }
+    }
+    let estimate = estimate_arm(&path, Method::Auto).ok()?;
+    let (l1, l2) = (estimate.upper_arm_length, estimate.forearm_length);
+    (l1.is_finite() && l2.is_finite() && l1 > 0.0 && l2 > 0.0).then_some((l1, l2))
+}
+
+/// Nominal records of the arms asked for most recently, newest last.
+type NominalCache = Mutex<Vec<((u64, u64), Arc<Vec<Sensed>>)>>;
+/// Exact predictions at the linearisation's reference arm of the effect
+/// sets asked for most recently (the polish and the cost of one point
+/// predict the same set), newest last.
+type PredictionCache = Mutex<Vec<(Vec<Applied>, Arc<Series>)>>;
+/// Exact predictions kept.
+const CACHED_PREDICTIONS: usize = 8;
+/// Half the step of the finite differences of the length Jacobian [m].
+const LENGTH_DIFFERENCE: f64 = 2e-4;
+
+/// The prediction linearised in the arm lengths around a reference arm:
+/// P(effects, l) ≈ P(effects, l₀) + J (l − l₀), J the nominal sim's
+/// derivative by l1 and l2 at l₀ (central differences).
+#[derive(Debug)]
+struct Linearisation {
+    reference: (f64, f64),
+    jacobian: [Series; 2],
+}
+
+/// The reference plant compared with one log.
+pub struct ArmModel {
+    lengths: Lengths,
+    /// Where the fit of the lengths starts (the kernel's estimate).
+    start: Option<(f64, f64)>,
+    /// The commanded set-point at every integration step to the last
+    /// sample's (replayed once; every plant run reads it).
+    set_points: Vec<SetPoint>,
+    data: Data,
+    columns: Vec<usize>,
+    steps: Vec<usize>,
+    nominal: NominalCache,
+    linearisation: Mutex<Option<Arc<Linearisation>>>,
+    predictions: PredictionCache,
+}
+
+impl ArmModel {
+    /// The sim of an arm of `lengths` against `records`, driven by their
+    /// commanded set-point. `y` is compared when every record has it.
+    ///
+    /// # Errors
+    /// See [`ArmError`].
+    pub fn new(lengths: Lengths, records: &[Record]) -> Result<Self, ArmError> {
+        if let Lengths::Given(l1, l2) = lengths {
+            PlantParameters::new(l1, l2)
+                .check()
+                .map_err(ArmError::Arm)?;
+        }
+        if records.is_empty() {
+            return Err(ArmError::Empty);
+        }
+        let lateral = records.iter().all(|r| r.lateral.is_some());
+        let columns: Vec<usize> = (0..ALL_SIGNALS.len())
+            .filter(|c| lateral || *c != LATERAL)
+            .collect();
+        let mut steps: Vec<usize> = Vec::with_capacity(records.len());
+        let mut observed = Series::with_capacity(columns.len(), records.len());
+        for (sample, record) in records.iter().enumerate() {
+            let time = record.time;
+            let bad_time = ArmError::Time { sample, time };
+            if !(0.0..=LONGEST_LOG).contains(&time) {
+                return Err(bad_time);
+            }
+            let step = (time / STEP).round() as usize;
+            if steps.last().is_some_and(|last| *last >= step) {
+                return Err(bad_time);
+            }
+            steps.push(step);
+            let all = [
+                record.pose.x,
+                record.pose.z,
+                record.pose.psi,
+                record.lateral.unwrap_or(0.0),
+                record.wrench.fx,
+                record.wrench.fz,
+                record.wrench.ty,
+            ];
+            let row: Vec<f64> = columns.iter().map(|c| all[*c]).collect();
+            observed
+                .push(&row)
+                .map_err(|e| ArmError::Sim(e.to_string()))?;
+        }
+        let set_points = Replay::new(records)?.set_points(steps.last().copied().unwrap_or(0));
+        let duration = records.last().map_or(0.0, |r| r.time);
+        let start = match lengths {
+            Lengths::Given(..) => None,
+            Lengths::Fitted => kernel_estimate(records),
+        };
+        let mut candidates = candidates(duration);
+        if lengths == Lengths::Fitted {
+            candidates.push(arm_candidate(start));
+        }
+        let model = Self {
+            lengths,
+            start,
+            set_points,
+            data: Data {
+                signals: columns.iter().map(|c| ALL_SIGNALS[*c]).collect(),
+                scales: columns.iter().map(|c| ALL_SCALES[*c]).collect(),
+                times: records.iter().map(|r| r.time).collect(),
+                observed,
+                candidates,
+            },
+            columns,
+            steps,
+            nominal: Mutex::new(Vec::new()),
+            linearisation: Mutex::new(None),
+            predictions: Mutex::new(Vec::new()),
+        };
+        let (l1, l2) = match lengths {
+            Lengths::Given(l1, l2) => (l1, l2),
+            Lengths::Fitted => model.start.unwrap_or((0.3, 0.2)),
+        };
+        let nominal = model
+            .nominal(l1, l2)
+            .map_err(|e| ArmError::Sim(e.to_string()))?;
+        if nominal.iter().flatten().any(|v| !v.is_finite()) {
+            return Err(ArmError::Sim("the nominal sim is not finite".into()));
+        }
+        if lengths == Lengths::Fitted {
+            model
+                .linearise((l1, l2))
+                .map_err(|e| ArmError::Sim(e.to_string()))?;
+        }
+        Ok(model)
+    }
+
+    /// Linearises the prediction around arm `reference`.
+    fn linearise(&self, reference: (f64, f64)) -> Result<(), ModelError> {
+        let h = LENGTH_DIFFERENCE;
+        let (l1, l2) = reference;
+        let derivative = |(a, b): ((f64, f64), (f64, f64))| -> Result<Series, ModelError> {
+            let plus = self.measured(&self.nominal(a.0, a.1)?, &Effects::default())?;
+            let minus = self.measured(&self.nominal(b.0, b.1)?, &Effects::default())?;
+            let mut out = Series::with_capacity(plus.signals(), plus.samples());
+            for i in 0..plus.samples() {
+                let row: Vec<f64> = plus
+                    .row(i)
+                    .iter()
+                    .zip(minus.row(i))
+                    .map(|(p, m)| (p - m) / (2.0 * h))
+                    .collect();
+                out.push(&row)?;
+            }
+            Ok(out)
+        };
+        let jacobian = [
+            derivative(((l1 + h, l2), (l1 - h, l2)))?,
+            derivative(((l1, l2 + h), (l1, l2 - h)))?,
+        ];
+        if let Ok(mut slot) = self.linearisation.lock() {
+            *slot = Some(Arc::new(Linearisation {
+                reference,
+                jacobian,
+            }));
+        }
+        if let Ok(mut cache) = self.predictions.lock() {
+            cache.clear();
+        }
+        Ok(())
+    }
+
+    fn current_linearisation(&self) -> Option<Arc<Linearisation>> {
+        self.linearisation.lock().ok().and_then(|l| l.clone())
+    }
+
+    /// The exact prediction of `effects` (no base) for arm `arm`.
+    fn exact(&self, arm: (f64, f64), applied: &[&Applied]) -> Result<Series, ModelError> {
+        let list = self.effects(applied)?;
+        let effects = Effects::new(&list).map_err(|e| ModelError::Effects(e.to_string()))?;
+        if list.iter().all(|e| MEASUREMENT_SIDE.contains(&e.name())) {
+            self.measured(&self.nominal(arm.0, arm.1)?, &effects)
+        } else {
+            self.simulated(arm, effects)
+        }
+    }
+
+    /// The exact prediction of `applied` (no base) at the reference arm
+    /// (cached).
+    fn at_reference(
+        &self,
+        lin: &Linearisation,
+        applied: &[&Applied],
+    ) -> Result<Arc<Series>, ModelError> {
+        let key: Vec<Applied> = applied.iter().map(|a| (*a).clone()).collect();
+        if let Ok(cache) = self.predictions.lock() {
+            if let Some((_, p)) = cache.iter().find(|(k, _)| *k == key) {
+                return Ok(Arc::clone(p));
+            }
+        }
+        let prediction = Arc::new(self.exact(lin.reference, applied)?);
+        if let Ok(mut cache) = self.predictions.lock() {
+            if cache.len() >= CACHED_PREDICTIONS {
+                cache.remove(0);
+            }
+            cache.push((key, Arc::clone(&prediction)));
+        }
+        Ok(prediction)
+    }
+
+    /// The lengths the model was built with.
+    pub fn lengths(&self) -> Lengths {
+        self.lengths
+    }
+
+    /// The kernel's estimate the fit of the lengths starts at, when the
+    /// lengths are fitted and the kernel could estimate them.
+    pub fn start(&self) -> Option<(f64, f64)> {
+        self.start
+    }
+
+    /// The arm lengths in `applied` (the base's values), else the given
+    /// ones, else the start; and the effects without the base.
+    pub fn arm_of<'a>(&self, applied: &'a [Applied]) -> ((f64, f64), Vec<&'a Applied>) {
+        let base = self.base();
+        let mut arm = match self.lengths {
+            Lengths::Given(l1, l2) => (l1, l2),
+            Lengths::Fitted => self.start.unwrap_or((0.3, 0.2)),
+        };
+        let mut effects = Vec::with_capacity(applied.len());
+        for a in applied {
+            if Some(a.candidate) == base {
+                if let [l1, l2] = a.values[..] {
+                    arm = (l1, l2);
+                }
+            } else {
+                effects.push(a);
+            }
+        }
+        (arm, effects)
+    }
+
+    /// The plant's parameters for an arm `l1`, `l2` (noise off).
+    fn parameters(l1: f64, l2: f64) -> PlantParameters {
+        let snap = |l: f64| (l / LENGTH_GRAIN).round() * LENGTH_GRAIN;
+        let mut params = PlantParameters::new(snap(l1), snap(l2));
+        params.noise = false;
+        params
+    }
+
+    /// Runs `plant` over the log's commanded motion, calling `keep` with
+    /// the step and what it senses at every step.
+    fn run(&self, mut plant: Plant, mut keep: impl FnMut(usize, Sensed)) {
+        for (k, set_point) in self.set_points.iter().enumerate() {
+            plant.set(*set_point);
+            keep(k, sensed(&plant.measure()));
+            plant.step();
+        }
+    }
+
+    /// The nominal record of arm `l1`, `l2`: what the robot senses at
+    /// every step, noise off (cached).
+    fn nominal(&self, l1: f64, l2: f64) -> Result<Arc<Vec<Sensed>>, ModelError> {
+        let params = Self::parameters(l1, l2);
+        let key = (
+            params.arm.upper_arm_length.to_bits(),
+            params.arm.forearm_length.to_bits(),
+        );
+        if let Ok(cache) = self.nominal.lock() {
+            if let Some((_, record)) = cache.iter().find(|(k, _)| *k == key) {
+                return Ok(Arc::clone(record));
+            }
+        }
+        let plant = Plant::new(params).map_err(ModelError::Simulation)?;
+        let mut record = Vec::with_capacity(self.steps.last().map_or(1, |s| s + 1));
+        self.run(plant, |_, s| record.push(s));
+        let record = Arc::new(record);
+        if let Ok(mut cache) = self.nominal.lock() {
+            if cache.len() >= CACHED_ARMS {
+                cache.remove(0);
+            }
+            cache.push((key, Arc::clone(&record)));
+        }
+        Ok(record)
+    }
+
+    fn effects(&self, applied: &[&Applied]) -> Result<Vec<Effect>, ModelError> {
+        applied
+            .iter()
+            .map(|a| {
+                let candidate =
+                    self.data.candidates.get(a.candidate).ok_or_else(|| {
+                        ModelError::Effects(format!("no candidate {}", a.candidate))
+                    })?;
+                let pairs: Vec<(&str, f64)> = candidate
+                    .parameters
+                    .iter()
+                    .map(|p| p.name)
+                    .zip(a.values.iter().copied())
+                    .collect();
+                Effect::new(candidate.name, &pairs).map_err(|e| ModelError::Effects(e.to_string()))
+            })
+            .collect()
+    }
+
+    fn series(&self, rows: impl Iterator<Item = Sensed>) -> Result<Series, ModelError> {
+        let mut out = Series::with_capacity(self.columns.len(), self.steps.len());
+        let mut row = vec![0.0; self.columns.len()];
+        for all in rows {
+            for (value, column) in row.iter_mut().zip(&self.columns) {
+                *value = all[*column];
+            }
+            out.push(&row)?;
+        }
+        Ok(out)
+    }
+
+    /// Measurement-side effects applied to the nominal record of an arm.
+    fn measured(&self, nominal: &[Sensed], effects: &Effects) -> Result<Series, ModelError> {
+        let delay = effects.latency.map_or(0, |l| l.steps());
+        let mut follower = 0.0;
+        let rows = self.steps.iter().map(|&step| {
+            let mut s = nominal
+                .get(step.saturating_sub(delay))
+                .copied()
+                .unwrap_or([f64::NAN; 7]);
+            let mut pose = [s[0], s[1], s[2]];
+            if let Some(compliance) = effects.grasp_compliance {
+                pose = compliance.end_effector(pose, [s[4], s[5], s[6]]);
+            }
+            if let Some(tilt) = effects.plane_tilt {
+                let (sin, cos) = tilt.angle.sin_cos();
+                s[3] = pose[1] * sin;
+                pose[1] *= cos;
+            }
+            if let Some(backlash) = effects.backlash {
+                follower = backlash.follow(follower, pose[2]);
+                pose[2] = follower;
+            }
+            if let Some(q) = effects.quantization {
+                pose = expected_rounding(&q, pose);
+            }
+            [pose[0], pose[1], pose[2], s[3], s[4], s[5], s[6]]
+        });
+        self.series(rows)
+    }
+
+    /// The plant of arm `l1`, `l2` re-run with `effects`, noise off.
+    fn simulated(&self, (l1, l2): (f64, f64), effects: Effects) -> Result<Series, ModelError> {
+        let plant = Plant::with_effects(Self::parameters(l1, l2), effects)
+            .map_err(ModelError::Simulation)?;
+        let mut rows = Vec::with_capacity(self.steps.len());
+        let mut next = self.steps.iter().peekable();
+        self.run(plant, |k, s| {
+            if next.peek().is_some_and(|step| **step == k) {
+                next.next();
+                rows.push(s);
+            }
+        });
+        self.series(rows.into_iter())
+    }
+}
+
+/// E[round((v + n) / step) · step] for n ~ N(0, σ²), per pose channel
+/// (σ of `plant.md`). For a step under 1.5 σ the expectation differs
+/// from v by less than 1e-4 σ (the bias's Fourier series decays as
+/// exp(−2π²σ²/step²)), so such a step is not modelled.
+fn expected_rounding(q: &Quantization, pose: [f64; 3]) -> [f64; 3] {
+    let one = |value: f64, step: f64, sigma: f64| -> f64 {
+        if step <= 1.5 * sigma {
+            return value;
+        }
+        let centre = (value / step).round();
+        // Steps farther than 6σ from the value have no probability left:
+        // at most 11 terms (step > 1.5 σ bounds the count).
+        let reach = (6.0 * sigma / step).ceil() as i64 + 1;
+        let cdf = |x: f64| 0.5 * (1.0 + libm::erf(x / (sigma * std::f64::consts::SQRT_2)));
+        let mut mean = 0.0;
+        for k in -reach..=reach {
+            let level = centre + k as f64;
+            let lo = (level - 0.5) * step - value;
+            let hi = (level + 0.5) * step - value;
+            mean += level * step * (cdf(hi) - cdf(lo));
+        }
+        mean
+    };
+    [
+        one(pose[0], q.pos, POSITION_NOISE),
+        one(pose[1], q.pos, POSITION_NOISE),
+        one(pose[2], q.ang, ANGLE_NOISE),
+    ]
+}
+
+impl Model for ArmModel {
+    fn data(&self) -> &Data {
+        &self.data
+    }
+
+    fn noise_floor(&self) -> f64 {
+        1.0
+    }
+
+    fn gap_metric(&self) -> &'static str {
+        "held_out_excess_rms_sigma"
+    }
+
+    fn base(&self) -> Option<usize> {
+        (self.lengths == Lengths::Fitted).then(|| self.data.candidates.len() - 1)
+    }
+
+    fn predict(&self, applied: &[Applied]) -> Result<Series, ModelError> {
+        let (arm, applied) = self.arm_of(applied);
+        let Some(lin) = self.current_linearisation() else {
+            return self.exact(arm, &applied);
+        };
+        let at = self.at_reference(&lin, &applied)?;
+        let delta = [arm.0 - lin.reference.0, arm.1 - lin.reference.1];
+        let mut out = Series::with_capacity(at.signals(), at.samples());
+        let mut row = vec![0.0; at.signals()];
+        for i in 0..at.samples() {
+            let (j1, j2) = (lin.jacobian[0].row(i), lin.jacobian[1].row(i));
+            for (s, value) in row.iter_mut().enumerate() {
+                *value = at.row(i)[s] + j1[s] * delta[0] + j2[s] * delta[1];
+            }
+            out.push(&row)?;
+        }
+        Ok(out)
+    }
+
+    /// Solves the arm lengths by linear least squares on the `mask`ed
+    /// samples, the effects held (the prediction is linear in them, see
+    /// [`Linearisation`]).
+    fn polish(&self, applied: &[Applied], mask: &[bool]) -> Option<Vec<Applied>> {
+        let base = self.base()?;
+        let lin = self.current_linearisation()?;
+        let (_, effects) = self.arm_of(applied);
+        let at = self.at_reference(&lin, &effects).ok()?;
+        let observed = &self.data.observed;
+        let scales = &self.data.scales;
+        let (mut a, mut b) = ([[0.0f64; 2]; 2], [0.0f64; 2]);
+        for i in (0..at.samples()).filter(|i| mask.get(*i).copied().unwrap_or(false)) {
+            let (j1, j2, p, o) = (
+                lin.jacobian[0].row(i),
+                lin.jacobian[1].row(i),
+                at.row(i),
+                observed.row(i),
+            );
+            for s in 0..scales.len() {
+                let w = 1.0 / (scales[s] * scales[s]);
+                let j = [j1[s], j2[s]];
+                let r = o[s] - p[s];
+                for x in 0..2 {
+                    b[x] += w * j[x] * r;
+                    for y in 0..2 {
+                        a[x][y] += w * j[x] * j[y];
+                    }
+                }
+            }
+        }
+        let det = a[0][0] * a[1][1] - a[0][1] * a[1][0];
+        if !(det.is_finite() && det.abs() > 0.0) {
+            return None;
+        }
+        let delta = [
+            (a[1][1] * b[0] - a[0][1] * b[1]) / det,
+            (a[0][0] * b[1] - a[1][0] * b[0]) / det,
+        ];
+        let parameters = &self.data.candidates[base].parameters;
+        let values: Vec<f64> = [lin.reference.0, lin.reference.1]
+            .iter()
+            .zip(delta)
+            .zip(parameters)
+            .map(|((r, d), p)| (r + d).clamp(p.min, p.max))
+            .collect();
+        let mut polished = applied.to_vec();
+        match polished.iter_mut().find(|a| a.candidate == base) {
+            Some(arm) => arm.values = values,
+            None => polished.insert(
+                0,
+                Applied {
+                    candidate: base,
+                    values,
+                },
+            ),
+        }
+        Some(polished)
+    }
+
+    fn recentre(&self, applied: &[Applied]) -> bool {
+        if self.lengths != Lengths::Fitted {
+            return false;
+        }
+        let (arm, _) = self.arm_of(applied);
+        let same = self
+            .current_linearisation()
+            .is_some_and(|l| l.reference == arm);
+        same || self.linearise(arm).is_ok()
+    }
+
+    fn starts(&self, candidate: usize, hints: &Hints) -> Vec<Vec<f64>> {
+        let Some(c) = self.data.candidates.get(candidate) else {
+            return Vec::new();
+        };
+        let measurement_side = MEASUREMENT_SIDE.contains(&c.name);
+        match (c.name, c.parameters.as_slice()) {
+            // The kernel's estimate (the centre) and a coarse grid around it.
+            (ARM, _) => grid(2, 3),
+            ("active_torque", [amp, freq]) => {
+                // The cost is periodic-multimodal in the frequency, with
+                // a valley about 1 / (10 · duration) Hz wide whatever the
+                // frequency. With a spectral peak in the residual: a comb
+                // of frequencies a third of that apart over the peak
+                // ±5 % and its band (a strong torque on an arm that
+                // touches the table shifts the peak off the torque's
+                // frequency: by 3.8 % and 14 % in self-check logs 197 and
+                // 165 of seed 7), at most `TEETH` of them, each at a small
+                // and a large amplitude: at the right frequency an
+                // amplitude below twice the true one beats the nominal
+                // sim (for a linear response), and the refinement walks
+                // the amplitude; the large one serves a strong, non-linear
+                // response. Always also a log-spaced comb over 0.1-5 Hz at
+                // two amplitudes, for a torque too weak to own the
+                // residual's peak.
+                const TEETH: usize = 160;
+                let times = self.times();
+                let duration = times.last().zip(times.first()).map_or(1.0, |(b, a)| b - a);
+                let spacing = 1.0 / (30.0 * duration.max(1.0));
+                let around_peak = hints.frequency.into_iter().flat_map(|f| {
+                    let (mut lo, mut hi) = (0.95 * f, 1.05 * f);
+                    if let Some([a, b]) = hints.band {
+                        (lo, hi) = (lo.min(a), hi.max(b));
+                    }
+                    let teeth = (((hi - lo) / spacing).ceil() as usize).clamp(1, TEETH);
+                    (0..teeth).flat_map(move |k| {
+                        let f = lo + (k as f64 + 0.5) * (hi - lo) / teeth as f64;
+                        [0.1, 0.6].map(|a| vec![amp.unit_of(a), freq.unit_of(f)])
+                    })
+                });
+                let comb = (0..12).flat_map(|k| {
+                    let fu = freq.unit_of(0.1 * 50f64.powf(f64::from(k) / 11.0));
+                    [0.1, 0.6].map(|a| vec![amp.unit_of(a), fu])
+                });
+                around_peak.chain(comb).collect()
+            }
+            // At the residual's onset (the sim's arm is the arm before
+            // the slip) and just before its end (the fitted arm is the
+            // arm after the slip, so the residual lies before it).
+            ("grasp_slip", [shift, at]) => {
+                let mut anchors: Vec<f64> = Vec::new();
+                if let Some(onset) = hints.onset {
+                    anchors.extend([0.0, 0.15, 0.3].map(|d| onset + d));
+                }
+                if let Some(end) = hints.end {
+                    anchors.extend([-0.6, -0.3, 0.0].map(|d| end + d));
+                }
+                if anchors.is_empty() {
+                    return grid(2, 5);
+                }
+                anchors
+                    .iter()
+                    .flat_map(|time| {
+                        let au = at.unit_of(*time);
+                        [-0.03, -0.01, -0.003, 0.003, 0.01, 0.03]
+                            .map(|s| vec![shift.unit_of(s), au])
+                    })
+                    .collect()
+            }
+            ("quantization", [pos, ang]) => {
+                // Rounded readings sit on a lattice: its spacing is the
+                // step, to the precision the optimiser cannot reach from
+                // a grid (the cost has a minimum per lattice alignment).
+                let position = resolution(
+                    &[self.data.observed.column(0), self.data.observed.column(1)].concat(),
+                );
+                let angle = resolution(&self.data.observed.column(2));
+                let mut starts = grid(2, 11);
+                starts.push(vec![pos.unit_of(position), ang.unit_of(angle)]);
+                starts
+            }
+            (_, [_]) if measurement_side => grid(1, 33),
+            (_, [_, _]) if measurement_side => grid(2, 11),
+            (_, parameters) => grid(parameters.len(), if parameters.len() <= 1 { 9 } else { 5 }),
+        }
+    }
+}
+
+/// The spacing of the lattice `values` sit on: the median gap between
+/// neighbouring distinct values (tiny for unrounded data).
+fn resolution(values: &[f64]) -> f64 {
+    let mut sorted: Vec<f64> = values.iter().copied().filter(|v| v.is_finite()).collect();
+    sorted.sort_by(f64::total_cmp);
+    sorted.dedup();
+    let mut gaps: Vec<f64> = sorted.windows(2).map(|w| w[1] - w[0]).collect();
+    if gaps.is_empty() {
+        return 0.0;
+    }
+    gaps.sort_by(f64::total_cmp);
+    gaps[gaps.len() / 2]
+}
+
+/// Every candidate names an effect of the sim's catalogue, with the same
+/// parameter names and units, searched inside the catalogue's range.
+pub fn candidates_match_catalogue(candidates: &[Candidate]) -> Result<(), String> {
+    for c in candidates.iter().filter(|c| c.name != ARM) {
+        let d = descriptor(c.name).ok_or_else(|| format!("{} is not a sim effect", c.name))?;
+        if d.parameters.len() != c.parameters.len() {
+            return Err(format!("{}: parameter count differs", c.name));
+        }
+        for (p, q) in c.parameters.iter().zip(d.parameters) {
+            if p.name != q.name
+                || p.unit != q.unit
+                || p.min < q.min
+                || p.max > q.max
+                || !p.is_valid()
+            {
+                return Err(format!(
+                    "{}.{}: name, unit or range differs from the sim's",
+                    c.name, p.name
+                ));
+            }
+        }
+    }
+    Ok(())
+}
