@@ -103,8 +103,21 @@ fn main() {
     let (cli, matches) = match matches {
         Ok(parsed) => parsed,
         Err(error) if error.use_stderr() => {
+            // clap names the missing or conflicting arguments on the lines
+            // after the first: they are joined into the one line.
             let text = error.to_string();
-            eprintln!("limb: {}", text.lines().next().unwrap_or("bad arguments"));
+            let words: Vec<&str> = text
+                .lines()
+                .take_while(|line| !line.starts_with("Usage:"))
+                .map(str::trim)
+                .filter(|line| !line.is_empty())
+                .collect();
+            let line = if words.is_empty() {
+                "bad arguments".to_string()
+            } else {
+                words.join(" ")
+            };
+            eprintln!("limb: {line}");
             std::process::exit(2);
         }
         Err(error) => error.exit(),

@@ -56,6 +56,15 @@ enum Adapter {
         /// fault is judged): CI's short run on a debug build.
         #[arg(long)]
         session_cycles: Option<u64>,
+        /// Run only session K of the seed's sequence (0-based, as the
+        /// losses name them; unpaced only, where a session does not
+        /// depend on the time left): a reported loss rerun alone.
+        #[arg(long, value_name = "K", requires = "unpaced")]
+        session: Option<u64>,
+        /// With `--session`: also write that session's log to this CSV
+        /// file (plant.md columns, as `limb kuka run --log`).
+        #[arg(long, value_name = "FILE.csv", requires = "session")]
+        session_log: Option<PathBuf>,
     },
     /// A node on the reference plant (`limb zenoh node`) at 1 kHz
     /// telemetry, supervised over Zenoh on loopback, with seeded random
@@ -167,6 +176,8 @@ pub fn run(args: SoakArgs) -> Result<(), CliError> {
             fri_version,
             unpaced,
             session_cycles,
+            session,
+            session_log,
             ..
         } => {
             let options = kuka::Options {
@@ -175,11 +186,17 @@ pub fn run(args: SoakArgs) -> Result<(), CliError> {
                     .map_err(|error| CliError::BadInput(format!("--fri-version: {error}")))?,
                 unpaced: *unpaced,
                 session_cycles: *session_cycles,
+                only: *session,
+                only_log: session_log.clone(),
             };
             let soak = kuka::soak(&budget, common.seed, &options)?;
             let unpaced = if *unpaced { " --unpaced" } else { "" };
             let cut = session_cycles.map_or(String::new(), |n| format!(" --session-cycles {n}"));
-            (soak, format!(" --fri-version {fri_version}{unpaced}{cut}"))
+            let only = session.map_or(String::new(), |k| format!(" --session {k}"));
+            (
+                soak,
+                format!(" --fri-version {fri_version}{unpaced}{cut}{only}"),
+            )
         }
         Adapter::Zenoh { .. } => (zenoh::soak(&budget, common.seed)?, String::new()),
     };
@@ -257,29 +274,51 @@ impl Budget {
     }
 }
 
-/// A writer that keeps only the count of lines written: the session
-/// log's rows (minus its header line), without the disk.
+/// A writer that counts the lines written: the session log's rows (minus
+/// its header line), without the disk unless a copy is asked for (`limb
+/// soak kuka --session K --session-log FILE`).
 #[derive(Debug, Default)]
-struct LineCount(u64);
+struct LineCount {
+    lines: u64,
+    copy: Option<io::BufWriter<std::fs::File>>,
+}
+
+impl LineCount {
+    /// Counts and also writes every byte to a new file at `path`.
+    fn copying_to(path: &std::path::Path) -> Result<Self, CliError> {
+        let file = std::fs::File::create(path).map_err(|error| {
+            CliError::BadInput(format!("--session-log {}: {error}", path.display()))
+        })?;
+        Ok(Self {
+            lines: 0,
+            copy: Some(io::BufWriter::new(file)),
+        })
+    }
+}
 
 impl Write for LineCount {
     fn write(&mut self, bytes: &[u8]) -> io::Result<usize> {
-        self.0 += bytes.iter().filter(|b| **b == b'\n').count() as u64;
+        if let Some(copy) = &mut self.copy {
+            copy.write_all(bytes)?;
+        }
+        self.lines += bytes.iter().filter(|b| **b == b'\n').count() as u64;
         Ok(bytes.len())
     }
 
     fn flush(&mut self) -> io::Result<()> {
-        Ok(())
+        self.copy.as_mut().map_or(Ok(()), Write::flush)
     }
 }
 
 /// Rows of a finished session log (its lines less the header).
 fn log_rows(log: limb_session::log::SessionLog<LineCount>) -> Result<u64, CliError> {
-    let lines = log
+    let mut count = log
         .finish()
-        .map_err(|error| CliError::Internal(format!("session log: {error}")))?
-        .0;
-    Ok(lines.saturating_sub(1))
+        .map_err(|error| CliError::Internal(format!("session log: {error}")))?;
+    count
+        .flush()
+        .map_err(|error| CliError::Internal(format!("session log copy: {error}")))?;
+    Ok(count.lines.saturating_sub(1))
 }
 
 /// The words of a stop's cause: a monitor limit (`StaleSensor`), `request

@@ -97,10 +97,23 @@ impl StopReason {
 }
 
 /// Grasp: the robot holds the wrist where it found it.
+///
+/// Invariant: the hold is the mean of the first `frames` measured poses
+/// (at most [`GRASP_HOLD_FRAMES`]), or the stop's set-point after a reset
+/// (`frames` then [`GRASP_HOLD_FRAMES`]: nothing more is averaged in).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Grasp {
     hold: Option<Pose>,
+    frames: u16,
 }
+
+/// Measured poses Grasp averages into its hold (frame S): the hold's noise
+/// is the measurement's over 8. Each new pose moves the hold by its
+/// deviation over the count, so the set-point never steps by one
+/// measurement's noise (REQ-SM-009): a position-controlled robot that
+/// starts following after some frames (FRI's COMMANDING_ACTIVE) would turn
+/// that step into a force spike.
+pub const GRASP_HOLD_FRAMES: u16 = 64;
 
 /// Estimate: the estimation lift is running, shaped by the provisional
 /// model ([`crate::lift`]), the path recorded and estimated online; then,
@@ -188,12 +201,43 @@ impl StateKind {
 impl Grasp {
     /// The initial state: no pose latched yet.
     pub const fn new() -> Self {
-        Self { hold: None }
+        Self {
+            hold: None,
+            frames: 0,
+        }
     }
 
-    /// The hold set-point, latching `measured` the first time.
+    /// Holding `hold` as it is (no averaging): after a reset, where the
+    /// robot was holding the stop's set-point.
+    const fn holding(hold: Pose) -> Self {
+        Self {
+            hold: Some(hold),
+            frames: GRASP_HOLD_FRAMES,
+        }
+    }
+
+    /// The hold set-point, `measured` (finite: the kernel's monitors have
+    /// passed it) averaged in while fewer than [`GRASP_HOLD_FRAMES`] poses
+    /// have been: the running mean m_k = m_{k-1} + (p_k − m_{k-1}) / k.
     pub fn hold(&mut self, measured: Pose) -> SetPoint {
-        SetPoint::hold(*self.hold.get_or_insert(measured))
+        let hold = match self.hold {
+            Some(hold) if self.frames >= GRASP_HOLD_FRAMES => hold,
+            Some(mean) => {
+                self.frames += 1;
+                let weight = 1.0 / f64::from(self.frames);
+                Pose::new(
+                    mean.x + (measured.x - mean.x) * weight,
+                    mean.z + (measured.z - mean.z) * weight,
+                    mean.psi + (measured.psi - mean.psi) * weight,
+                )
+            }
+            None => {
+                self.frames = 1;
+                measured
+            }
+        };
+        self.hold = Some(hold);
+        SetPoint::hold(hold)
     }
 
     /// The pose held, once latched (frame S).
@@ -429,9 +473,11 @@ impl SafeStop {
         self.hold.map(SetPoint::hold)
     }
 
-    /// The operator's reset: back to [`Grasp`], with no model.
+    /// The operator's reset: back to [`Grasp`], with no model, holding the
+    /// stop's set-point (the robot was holding it: no step, REQ-SM-009),
+    /// or latching anew when the stop had none.
     pub fn reset(self) -> Grasp {
-        Grasp::new()
+        self.hold.map_or(Grasp::new(), Grasp::holding)
     }
 }
 
@@ -604,8 +650,9 @@ mod verification {
         );
     }
 
-    /// REQ-SM-006: a stop from any state latches the pose only when it is
-    /// finite, and the only way out, a reset, leads to Grasp with no pose.
+    /// REQ-SM-006, REQ-SM-009: a stop from any state latches the pose only
+    /// when it is finite, and the only way out, a reset, leads to Grasp
+    /// holding the stop's set-point (none when the stop had none).
     #[cfg_attr(kani, kani::proof)]
     pub fn verify_req_sm_006_stop_holds_only_a_finite_pose() {
         let at = if kani::any() {
@@ -627,7 +674,8 @@ mod verification {
             (None, None) => {}
         }
         assert_eq!(stop.reason(), StopReason::Operator);
-        assert_eq!(stop.reset(), Grasp::new());
+        let grasp = stop.reset();
+        assert_eq!(grasp.held().map(SetPoint::hold), stop.hold());
     }
 
     #[cfg(test)]

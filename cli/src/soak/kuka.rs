@@ -223,10 +223,11 @@ fn session(
     let mut plant = PlantParameters::new(0.30, 0.20);
     plant.seed = seed;
     let ended = Arc::new(AtomicBool::new(false));
-    let observer = (
-        SessionLog::new(LineCount::default()),
-        EndWatch(Arc::clone(&ended)),
-    );
+    let log = match &options.only_log {
+        Some(path) => LineCount::copying_to(path)?,
+        None => LineCount::default(),
+    };
+    let observer = (SessionLog::new(log), EndWatch(Arc::clone(&ended)));
     let mut state_at_fault = None;
     let mut ended_at = None;
     let (run, (log, _)) = run_loopback_observed(
@@ -302,6 +303,11 @@ pub struct Options {
     /// within them; a session with a fault runs until its window and
     /// aftermath have passed): short sessions for a slow build.
     pub session_cycles: Option<u64>,
+    /// Run only this session of the sequence (unpaced: the draws of the
+    /// sessions before it are made and skipped).
+    pub only: Option<u64>,
+    /// Where to copy the log of the `only` session.
+    pub only_log: Option<std::path::PathBuf>,
 }
 
 /// True when `case` can be judged under `options`.
@@ -320,7 +326,7 @@ pub fn soak(budget: &Budget, seed: u64, options: &Options) -> Result<Soak, CliEr
         ..Judge::default()
     };
     let cases: Vec<&Case> = CASES.iter().filter(|c| applies(c, options)).collect();
-    for index in 0.. {
+    for index in 0_u64.. {
         if budget.spent() {
             break;
         }
@@ -334,8 +340,13 @@ pub fn soak(budget: &Budget, seed: u64, options: &Options) -> Result<Soak, CliEr
         };
         let length = options.session_cycles.unwrap_or(SESSION_CYCLES);
         let start = 1 + (draws.uniform() * length.min(left) as f64) as u64;
-        let session_seed = seed.wrapping_mul(1000).wrapping_add(index as u64);
+        let session_seed = seed.wrapping_mul(1000).wrapping_add(index);
         let case = cases.get(pick).copied();
+        match options.only {
+            Some(only) if index < only => continue,
+            Some(only) if index > only => break,
+            _ => {}
+        }
         judge.add(index, &session(options, budget, session_seed, case, start)?);
         memory.after_session(budget);
     }
@@ -363,7 +374,7 @@ struct Judge {
 }
 
 impl Judge {
-    fn add(&mut self, index: usize, s: &Session) {
+    fn add(&mut self, index: u64, s: &Session) {
         if s.rows + s.stale_steps != s.steps {
             self.ledger.lose(format!(
                 "session {index}: {} log rows + {} stale steps for {} kernel steps",
