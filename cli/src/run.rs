@@ -419,8 +419,9 @@ pub struct RunArgs {
     /// Print one JSON object instead of the human report.
     #[arg(long)]
     pub json: bool,
-    /// Write the session (every kernel step's measurement, commanded
-    /// set-point and the plant's truth) to this CSV in the plant.md format.
+    /// Write the session (every frame's measurement, commanded set-point
+    /// and the plant's truth) to this CSV in the plant.md format, and every
+    /// kernel step to FILE.steps.csv beside it.
     #[arg(long)]
     pub log: Option<std::path::PathBuf>,
     /// Print only the session's canonical digest (events, exact model,

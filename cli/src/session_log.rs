@@ -7,7 +7,7 @@
 use crate::error::CliError;
 use limb_kernel::trace::TraceEvent;
 use limb_kernel::{Kernel, KernelConfig};
-use limb_session::log::{Logged, SessionLog};
+use limb_session::log::{Logged, SessionLog, StepLog};
 use limb_session::operator::describe;
 use limb_session::{ArrivalClock, Observer, Operator, Outcome, Robot, SessionPlan};
 use limb_zenoh::kernel_wire::KernelEvent;
@@ -16,22 +16,29 @@ use std::fs::File;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 
-/// An open session log.
-pub type Log = SessionLog<BufWriter<File>>;
+/// An open session log: the frame log (plant.md) and its step log.
+pub type Log = (SessionLog<BufWriter<File>>, StepLog<BufWriter<File>>);
 
 /// The log at `path`, when one is asked for.
 pub struct LogFile;
 
 impl LogFile {
-    /// Creates the log file at `path` (none without a path).
+    /// Creates the frame log at `path` and the step log beside it
+    /// ([`steps_path`]); none without a path.
     ///
     /// # Errors
-    /// [`CliError::BadInput`] when the file cannot be created.
+    /// [`CliError::BadInput`] when a file cannot be created.
     pub fn create(path: Option<&Path>) -> Result<Option<Log>, CliError> {
         path.map(|path| {
-            File::create(path)
-                .map(|file| SessionLog::new(BufWriter::new(file)))
-                .map_err(|error| cannot_write(path, &error))
+            let open = |path: &Path| {
+                File::create(path)
+                    .map(BufWriter::new)
+                    .map_err(|error| cannot_write(path, &error))
+            };
+            Ok((
+                SessionLog::new(open(path)?),
+                StepLog::new(open(&steps_path(path))?),
+            ))
         })
         .transpose()
     }
@@ -42,13 +49,30 @@ impl LogFile {
     /// [`CliError::BadInput`] when a row could not be written.
     pub fn finish(log: Option<Log>, path: Option<&Path>) -> Result<(), CliError> {
         match (log, path) {
-            (Some(log), Some(path)) => log
-                .finish()
-                .map(drop)
-                .map_err(|error| cannot_write(path, &error)),
+            (Some((frames, steps)), Some(path)) => {
+                frames
+                    .finish()
+                    .map_err(|error| cannot_write(path, &error))?;
+                let steps_path = steps_path(path);
+                steps
+                    .finish()
+                    .map(drop)
+                    .map_err(|error| cannot_write(&steps_path, &error))
+            }
             _ => Ok(()),
         }
     }
+}
+
+/// The step log beside the frame log `path`: `FILE.csv` → `FILE.steps.csv`.
+pub fn steps_path(path: &Path) -> PathBuf {
+    let stem = match path.extension() {
+        Some(extension) if extension == "csv" => path.with_extension(""),
+        _ => path.to_path_buf(),
+    };
+    let mut name = stem.into_os_string();
+    name.push(".steps.csv");
+    PathBuf::from(name)
 }
 
 fn cannot_write(path: &Path, error: &std::io::Error) -> CliError {
@@ -103,9 +127,10 @@ pub struct SessionArgs {
     zenoh: bool,
     #[command(flatten)]
     link: crate::zenoh::NodeLink,
-    /// Write the session log (every kernel step: robot stamp, commanded
-    /// set-point, measured pose and wrench in frame S) to this CSV in the
-    /// plant.md format.
+    /// Write the session log (every frame stepped on: robot stamp,
+    /// commanded set-point, measured pose and wrench in frame S) to this
+    /// CSV in the plant.md format, and every kernel step (silences
+    /// included) to FILE.steps.csv beside it.
     #[arg(long)]
     log: Option<PathBuf>,
 }

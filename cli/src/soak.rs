@@ -310,15 +310,66 @@ impl Write for LineCount {
     }
 }
 
-/// Rows of a finished session log (its lines less the header).
-fn log_rows(log: limb_session::log::SessionLog<LineCount>) -> Result<u64, CliError> {
-    let mut count = log
-        .finish()
-        .map_err(|error| CliError::Internal(format!("session log: {error}")))?;
-    count
-        .flush()
-        .map_err(|error| CliError::Internal(format!("session log copy: {error}")))?;
-    Ok(count.lines.saturating_sub(1))
+/// The session logs of a soak's session, counted (and copied to files
+/// for `--session-log`).
+type CountedLog = (
+    limb_session::log::SessionLog<LineCount>,
+    limb_session::log::StepLog<LineCount>,
+);
+
+/// Counting logs; with `copy`, also written to that frame log file and
+/// its step log beside it.
+fn counted_log(copy: Option<&std::path::Path>) -> Result<CountedLog, CliError> {
+    let (frames, steps) = match copy {
+        Some(path) => (
+            LineCount::copying_to(path)?,
+            LineCount::copying_to(&crate::session_log::steps_path(path))?,
+        ),
+        None => (LineCount::default(), LineCount::default()),
+    };
+    Ok((
+        limb_session::log::SessionLog::new(frames),
+        limb_session::log::StepLog::new(steps),
+    ))
+}
+
+/// Rows of a finished session's logs (their lines less the header).
+#[derive(Clone, Copy, Debug, Default)]
+struct LogRows {
+    /// Frame log rows: one per frame stepped on.
+    frames: u64,
+    /// Step log rows: one per kernel step.
+    steps: u64,
+}
+
+impl LogRows {
+    /// The rows of `log`, flushed.
+    fn of(log: CountedLog) -> Result<Self, CliError> {
+        let lines = |count: io::Result<LineCount>| {
+            let mut count =
+                count.map_err(|error| CliError::Internal(format!("session log: {error}")))?;
+            count
+                .flush()
+                .map_err(|error| CliError::Internal(format!("session log copy: {error}")))?;
+            Ok::<_, CliError>(count.lines.saturating_sub(1))
+        };
+        Ok(Self {
+            frames: lines(log.0.finish())?,
+            steps: lines(log.1.finish())?,
+        })
+    }
+
+    /// What is missing against the session's kernel steps, in words:
+    /// every step has its step-log row, every step on a new frame its
+    /// frame-log row.
+    fn missing(&self, steps: u64, stale_steps: u64) -> Option<String> {
+        (self.steps != steps || self.frames + stale_steps != steps).then(|| {
+            format!(
+                "{} step-log rows and {} frame-log rows + {stale_steps} stale steps for {steps} kernel steps",
+                self.steps, self.frames
+            )
+        })
+    }
 }
 
 /// The words of a stop's cause: a monitor limit (`StaleSensor`), `request

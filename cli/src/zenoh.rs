@@ -161,7 +161,7 @@ enum Action {
         #[arg(long, default_value_t = 1)]
         seed: u64,
         /// Write the session log (plant.md CSV, with the plant's truth) to
-        /// this file.
+        /// this file, and every kernel step to FILE.steps.csv beside it.
         #[arg(long)]
         log: Option<PathBuf>,
     },

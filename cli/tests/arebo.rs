@@ -88,6 +88,7 @@ fn an_arebo_kernel_session_log_is_estimated_and_diagnosed() {
         .args(["diagnose", log, "--json"])
         .output();
     let _ = std::fs::remove_file(&file);
+    let _ = std::fs::remove_file(file.with_extension("steps.csv"));
     let estimate = json(&estimate.unwrap());
     let (l1, l2) = (
         estimate["l1"].as_f64().unwrap(),

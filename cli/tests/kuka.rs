@@ -167,6 +167,7 @@ fn a_kuka_session_log_is_estimated_and_diagnosed() {
     let estimate = limb(&["estimate", log, "--json"]).unwrap();
     let diagnosis = limb(&["diagnose", log, "--json"]).unwrap();
     let _ = std::fs::remove_file(&file);
+    let _ = std::fs::remove_file(file.with_extension("steps.csv"));
     let estimate = json(estimate);
     let l1 = estimate["l1"].as_f64().unwrap();
     let l2 = estimate["l2"].as_f64().unwrap();

@@ -70,9 +70,11 @@ fn every_benchmark_arm_completes_inside_the_joint_limits() {
     }
 }
 
-/// `--log` writes the session in the plant.md format: every kernel step,
-/// with the commanded set-point and the truth; `limb estimate` reads it
-/// back (at the kernel's path rate) and the validator accepts the arm.
+/// `--log` writes the session in the plant.md format: every frame, with
+/// the commanded set-point and the truth (on the reference plant every
+/// kernel step has a fresh frame), and the step log beside it with a row
+/// per kernel step; `limb estimate` reads the log back (at the kernel's
+/// path rate) and the validator accepts the arm.
 #[test]
 fn the_session_log_is_read_back_by_limb_estimate() {
     let file = std::env::temp_dir().join(format!("limb-run-log-{}.csv", std::process::id()));
@@ -87,6 +89,17 @@ fn the_session_log_is_read_back_by_limb_estimate() {
         "t,xd,zd,psid,x,y,z,psi,fx,fz,ty,q1,q2,elbow_x,elbow_z,shoulder_x,shoulder_z"
     );
     assert_eq!(lines.count() as u64, report["steps"].as_u64().unwrap());
+    let steps_file = file.with_extension("steps.csv");
+    let steps = std::fs::read_to_string(&steps_file).unwrap();
+    let _ = std::fs::remove_file(&steps_file);
+    assert_eq!(
+        steps.lines().count() as u64 - 1,
+        report["steps"].as_u64().unwrap()
+    );
+    assert!(steps
+        .lines()
+        .skip(1)
+        .all(|line| line.split(',').nth(3) == Some("0")));
     for method in ["auto", "online"] {
         let (code, out, err) = limb(&["estimate", log, "--method", method, "--json"]);
         assert_eq!(code, 0, "{method}: {err}");

@@ -43,5 +43,5 @@ pub mod supervisor;
 
 pub use operator::{FittedModel, Operator, SessionPlan};
 pub use robot::{ArrivalClock, Frame, Robot, Sensed};
-pub use run::{run, Observer, Outcome, Unobserved};
+pub use run::{run, Observer, Outcome, Step, Unobserved};
 pub use supervisor::Supervisor;

@@ -1,7 +1,9 @@
-//! The session log: every step of a session as one CSV row in the format
-//! of `plant.md`, which `limb estimate` and `limb diagnose` read.
+//! The session logs: every frame the kernel stepped on as one CSV row in
+//! the format of `plant.md`, which `limb estimate` and `limb diagnose`
+//! read ([`SessionLog`]), and every kernel step as one row of the step log
+//! ([`StepLog`]), silences included.
 //!
-//! # Format
+//! # Frame log format
 //! The columns [`COLUMNS`] — `t,xd,zd,psid,x,y,z,psi,fx,fz,ty`: the
 //! robot's stamp, the commanded set-point pose x_d, the measured grasp
 //! pose (y when the robot measures it) and the external wrench, frame S,
@@ -11,9 +13,24 @@
 //! Rust's shortest round-trip `f64` form: reading it back gives the same
 //! bits. One row per frame the kernel stepped on, written as the session
 //! runs (a crash loses at most the buffered rows).
+//!
+//! # Step log format
+//! A step on no new frame (the robot was silent, or its stamps jumped
+//! past the kernel's `max_sensor_age`: the kernel steps on the last frame
+//! at the new time and its watchdog judges) has no row of its own in the
+//! frame log: its `t` would repeat the previous row's, which `plant.md`
+//! readers refuse. The step log has one row per kernel step, in order,
+//! with the columns [`STEP_COLUMNS`]: `step` (0, 1, …), `now` (kernel time
+//! [s]), `t` (the stamp of the frame stepped on), `stale` (1 on the last
+//! frame again, else 0), `state` and `mode` (of the command: `Grasp` …
+//! `SafeStop`, `Track`/`Hold`/`Stop`), the commanded set-point `xd,zd,psid`
+//! (empty without one), the commanded wrench `fx_cmd,fz_cmd,ty_cmd` [N,
+//! N, N m] and `saturated` (1 when a saturation acted). Its rows with
+//! `stale` 0 are the frame log's rows, one for one; a watchdog stop during
+//! a silence is the step log's row with `stale` 1 and `state` SafeStop.
 
 use crate::robot::Frame;
-use crate::run::Observer;
+use crate::run::{Observer, Step};
 use limb_kernel::geometry::{Pose, Wrench};
 use limb_kernel::{Command, StateKind};
 use std::fmt::Write as _;
@@ -93,33 +110,44 @@ pub fn header(columns: &[&str]) -> String {
     text
 }
 
-/// An [`Observer`] writing the session log to `W` as the session runs.
+/// Rows of CSV written to `W` as the session runs, the first write error
+/// kept (the session goes on; [`CsvOut::finish`] reports it).
 #[derive(Debug)]
-pub struct SessionLog<W: Write> {
+struct CsvOut<W: Write> {
     out: W,
     line: String,
-    extra: Vec<Option<f64>>,
     started: bool,
     error: Option<io::Error>,
 }
 
-impl<W: Write> SessionLog<W> {
-    /// A log written to `out` (buffer it: one write per row).
-    pub fn new(out: W) -> Self {
+impl<W: Write> CsvOut<W> {
+    fn new(out: W) -> Self {
         Self {
             out,
             line: String::new(),
-            extra: Vec::new(),
             started: false,
             error: None,
         }
     }
 
-    /// Flushes the log and returns its writer.
-    ///
-    /// # Errors
-    /// The first write error of the session, or the flush's.
-    pub fn finish(mut self) -> io::Result<W> {
+    /// Writes one row that `fill` appends to the line, the `header` line
+    /// first when this is the first row.
+    fn row(&mut self, header: impl FnOnce() -> String, fill: impl FnOnce(&mut String)) {
+        if self.error.is_some() {
+            return;
+        }
+        self.line.clear();
+        if !self.started {
+            self.started = true;
+            self.line.push_str(&header());
+        }
+        fill(&mut self.line);
+        if let Err(error) = self.out.write_all(self.line.as_bytes()) {
+            self.error = Some(error);
+        }
+    }
+
+    fn finish(mut self) -> io::Result<W> {
         if let Some(error) = self.error.take() {
             return Err(error);
         }
@@ -128,30 +156,131 @@ impl<W: Write> SessionLog<W> {
     }
 }
 
+/// An [`Observer`] writing the frame log to `W` as the session runs.
+#[derive(Debug)]
+pub struct SessionLog<W: Write> {
+    csv: CsvOut<W>,
+    extra: Vec<Option<f64>>,
+}
+
+impl<W: Write> SessionLog<W> {
+    /// A log written to `out` (buffer it: one write per row).
+    pub fn new(out: W) -> Self {
+        Self {
+            csv: CsvOut::new(out),
+            extra: Vec::new(),
+        }
+    }
+
+    /// Flushes the log and returns its writer.
+    ///
+    /// # Errors
+    /// The first write error of the session, or the flush's.
+    pub fn finish(self) -> io::Result<W> {
+        self.csv.finish()
+    }
+}
+
 impl<R: Logged + ?Sized, W: Write> Observer<R> for SessionLog<W> {
     fn after_step(&mut self, robot: &R, frame: &Frame, _: StateKind, command: &Command) {
-        if self.error.is_some() {
-            return;
-        }
-        self.line.clear();
-        if !self.started {
-            self.started = true;
-            self.line.push_str(&header(robot.columns()));
-        }
         self.extra.clear();
         robot.values(&mut self.extra);
         let sample = &frame.sample;
-        Row {
+        let row = Row {
             time: sample.time,
             command: command.set_point.map(|s| s.pose),
             pose: sample.pose,
             lateral: frame.lateral,
             wrench: sample.wrench,
             extra: &self.extra,
+        };
+        self.csv
+            .row(|| header(robot.columns()), |line| row.write(line));
+    }
+}
+
+/// The step log's columns, in order.
+pub const STEP_COLUMNS: [&str; 13] = [
+    "step",
+    "now",
+    "t",
+    "stale",
+    "state",
+    "mode",
+    "xd",
+    "zd",
+    "psid",
+    "fx_cmd",
+    "fz_cmd",
+    "ty_cmd",
+    "saturated",
+];
+
+/// An [`Observer`] writing the step log (one row per kernel step) to `W`
+/// as the session runs.
+#[derive(Debug)]
+pub struct StepLog<W: Write> {
+    csv: CsvOut<W>,
+    steps: u64,
+}
+
+impl<W: Write> StepLog<W> {
+    /// A step log written to `out` (buffer it: one write per row).
+    pub fn new(out: W) -> Self {
+        Self {
+            csv: CsvOut::new(out),
+            steps: 0,
         }
-        .write(&mut self.line);
-        if let Err(error) = self.out.write_all(self.line.as_bytes()) {
-            self.error = Some(error);
-        }
+    }
+
+    /// Flushes the log and returns its writer.
+    ///
+    /// # Errors
+    /// The first write error of the session, or the flush's.
+    pub fn finish(self) -> io::Result<W> {
+        self.csv.finish()
+    }
+}
+
+impl<R: ?Sized, W: Write> Observer<R> for StepLog<W> {
+    fn stepped(&mut self, step: &Step<'_>) {
+        let index = self.steps;
+        self.steps += 1;
+        let command = step.command;
+        let set_point = command.set_point.map(|s| [s.pose.x, s.pose.z, s.pose.psi]);
+        let numbers = [
+            Some(step.now),
+            Some(step.sample.time),
+            Some(f64::from(u8::from(step.stale))),
+        ];
+        let wrench = [command.wrench.fx, command.wrench.fz, command.wrench.ty];
+        self.csv.row(
+            || format!("{}\n", STEP_COLUMNS.join(",")),
+            |line| {
+                // Writing into a String cannot fail.
+                let _ = write!(line, "{index}");
+                for value in numbers {
+                    push(line, value);
+                }
+                let _ = write!(line, ",{:?},{:?}", command.state, command.mode);
+                for value in (0..3).map(|i| set_point.map(|p| p[i])) {
+                    push(line, value);
+                }
+                for value in wrench {
+                    push(line, Some(value));
+                }
+                let _ = write!(line, ",{}", u8::from(command.saturation.any()));
+                line.push('\n');
+            },
+        );
+    }
+}
+
+/// Appends `,value` (`,` alone for `None`) to `line`.
+fn push(line: &mut String, value: Option<f64>) {
+    line.push(',');
+    if let Some(value) = value {
+        // Writing into a String cannot fail.
+        let _ = write!(line, "{value}");
     }
 }

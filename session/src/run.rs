@@ -21,9 +21,10 @@
 //! silent time: past `max_sensor_age` the watchdog trips the safe stop.
 //!
 //! An [`Observer`] sees each frame's step from just before
-//! [`Kernel::step`] to just after it, and every trace event: the host times
-//! the step and writes the session log there, the firmware counts the
-//! step's instructions. Nothing the observer does changes the session.
+//! [`Kernel::step`] to just after it, every kernel step (frames and
+//! silences, [`Step`]) and every trace event: the host times the step and
+//! writes the session logs there, the firmware counts the step's
+//! instructions. Nothing the observer does changes the session.
 
 use crate::clock::AlignedClock;
 use crate::digest::CommandHash;
@@ -45,6 +46,23 @@ pub trait Observer<R: ?Sized> {
     fn after_step(&mut self, _robot: &R, _frame: &Frame, _state: StateKind, _command: &Command) {}
     /// Each transition or refusal the kernel recorded, in order.
     fn event(&mut self, _event: &TraceEvent) {}
+    /// Every kernel step, on a new frame or (`stale`) on the last frame
+    /// again, after the step returned, before its events.
+    fn stepped(&mut self, _step: &Step<'_>) {}
+}
+
+/// One kernel step as the observers see it.
+#[derive(Clone, Copy, Debug)]
+pub struct Step<'a> {
+    /// Kernel time of the step [s].
+    pub now: f64,
+    /// The frame the kernel stepped on.
+    pub sample: &'a PathSample,
+    /// True when that frame is the last one again: the robot was silent, or
+    /// its stamps jumped by more than the kernel's `max_sensor_age`.
+    pub stale: bool,
+    /// What the step returned.
+    pub command: &'a Command,
 }
 
 /// An observer that watches nothing.
@@ -69,6 +87,11 @@ impl<R: ?Sized, A: Observer<R>, B: Observer<R>> Observer<R> for (A, B) {
         self.0.event(event);
         self.1.event(event);
     }
+
+    fn stepped(&mut self, step: &Step<'_>) {
+        self.0.stepped(step);
+        self.1.stepped(step);
+    }
 }
 
 /// An observer lent to the session.
@@ -83,6 +106,10 @@ impl<R: ?Sized, A: Observer<R> + ?Sized> Observer<R> for &mut A {
 
     fn event(&mut self, event: &TraceEvent) {
         (**self).event(event);
+    }
+
+    fn stepped(&mut self, step: &Step<'_>) {
+        (**self).stepped(step);
     }
 }
 
@@ -103,6 +130,12 @@ impl<R: ?Sized, A: Observer<R>> Observer<R> for Option<A> {
     fn event(&mut self, event: &TraceEvent) {
         if let Some(a) = self {
             a.event(event);
+        }
+    }
+
+    fn stepped(&mut self, step: &Step<'_>) {
+        if let Some(a) = self {
+            a.stepped(step);
         }
     }
 }
@@ -139,12 +172,31 @@ struct Loop {
 }
 
 impl Loop {
-    /// One kernel step on `sample` at `now`, counted and hashed.
-    fn step(&mut self, kernel: &mut Kernel, sample: &PathSample, now: f64) -> Command {
+    /// One kernel step on `sample` at `now`, counted, hashed and shown to
+    /// `observer` (`stale`: the last frame again).
+    fn step<R, O>(
+        &mut self,
+        kernel: &mut Kernel,
+        observer: &mut O,
+        sample: &PathSample,
+        now: f64,
+        stale: bool,
+    ) -> Command
+    where
+        R: ?Sized,
+        O: Observer<R> + ?Sized,
+    {
         let command = kernel.step(sample, now);
         self.hash.push(&command);
         self.outcome.steps += 1;
+        self.outcome.stale_steps += u64::from(stale);
         self.outcome.saturated_commands += u64::from(command.saturation.any());
+        observer.stepped(&Step {
+            now,
+            sample,
+            stale,
+            command: &command,
+        });
         command
     }
 
@@ -195,8 +247,7 @@ impl Loop {
         O: Observer<R> + ?Sized,
     {
         if let Some(last) = self.last {
-            self.outcome.stale_steps += 1;
-            let command = self.step(kernel, &last, now);
+            let command = self.step::<R, O>(kernel, observer, &last, now, true);
             self.tell::<R, S, O>(kernel, supervisor, observer, &last, &command, now);
         }
     }
@@ -267,7 +318,7 @@ where
         supervisor.before_step(kernel, now, frame.following);
         let state = kernel.state().kind();
         observer.before_step(robot, &frame, state);
-        let command = session.step(kernel, &frame.sample, now);
+        let command = session.step::<R, O>(kernel, observer, &frame.sample, now, false);
         observer.after_step(robot, &frame, state, &command);
         session.tell::<R, S, O>(kernel, supervisor, observer, &frame.sample, &command, now);
         robot.actuate(&command)?;

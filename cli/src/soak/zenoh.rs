@@ -11,9 +11,10 @@
 //! `emergency_stop`, after which the supervisor resets and the session
 //! ends. Every command is answered (accepted or refused) or counted as
 //! missed; every sample the node published is received or counted as lost;
-//! every kernel step has its session-log row.
+//! every kernel step has its step-log row and every frame its session-log
+//! row.
 
-use super::{log_rows, Budget, Ledger, LineCount, MemoryWatch, Soak};
+use super::{counted_log, Budget, CountedLog, Ledger, LogRows, MemoryWatch, Soak};
 use crate::error::CliError;
 use limb_kernel::{Kernel, KernelConfig, StateKind};
 use limb_sim::noise::Gaussian;
@@ -131,7 +132,7 @@ struct Counts {
 /// `start` (if any).
 struct Script<'a> {
     supervisor: &'a mut Supervisor,
-    node: &'a Node<limb_session::log::SessionLog<LineCount>>,
+    node: &'a Node<CountedLog>,
     start: Instant,
     /// The soak's end: the script stops waiting there.
     budget: Budget,
@@ -243,7 +244,7 @@ struct Session {
     /// Each of them, its kernel time and the state it stopped.
     stop_times: Vec<String>,
     steps: u64,
-    rows: u64,
+    rows: LogRows,
     stale_steps: u64,
     published: u64,
     received: u64,
@@ -327,7 +328,7 @@ fn session(
     let robot = ReferenceRobot::new(plant, 1.0 / PERIOD.as_secs_f64(), f64::INFINITY);
     let listen =
         peer_config(std::slice::from_ref(&endpoint), &[], LEASE_MS).map_err(|e| internal(&e))?;
-    let log = limb_session::log::SessionLog::new(LineCount::default());
+    let log = counted_log(None)?;
     let node = Node::spawn_observed(listen, &settings, Some(PERIOD), kernel, robot, log)
         .map_err(|e| internal(&e))?;
     let connect =
@@ -427,7 +428,7 @@ fn session(
         stops,
         stop_times,
         steps: outcome.steps,
-        rows: log_rows(log)?,
+        rows: LogRows::of(log)?,
         stale_steps: outcome.stale_steps,
         published: (judged - first).saturating_sub(status.counters.samples_dropped),
         received: received.steps.range(first..judged).count() as u64,
@@ -454,7 +455,8 @@ impl Session {
             "estop_missed": self.counts.estop_missed,
             "safe_stops": self.stop_times,
             "kernel_steps": self.steps,
-            "log_rows": self.rows,
+            "log_rows": self.rows.frames,
+            "step_log_rows": self.rows.steps,
             "stale_steps": self.stale_steps,
             "samples_published": self.published,
             "samples_received": self.received,
@@ -506,11 +508,8 @@ impl Judge {
         for (name, count) in &s.stops {
             *self.stops.entry(name.clone()).or_default() += count;
         }
-        if s.rows + s.stale_steps != s.steps {
-            self.ledger.lose(format!(
-                "session {index}: {} log rows + {} stale steps for {} kernel steps",
-                s.rows, s.stale_steps, s.steps
-            ));
+        if let Some(missing) = s.rows.missing(s.steps, s.stale_steps) {
+            self.ledger.lose(format!("session {index}: {missing}"));
         }
         if s.counts.missed + s.counts.estop_missed > 0 {
             self.ledger.lose(format!(
