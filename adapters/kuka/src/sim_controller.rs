@@ -28,6 +28,12 @@
 //!    K⁻¹ F, zero velocity;
 //! 6. the plant advances one period ([`limb_sim::closed_loop::advance`]).
 //!
+//! Paced ([`Pacing::RealTime`]), a cycle that starts more than a period late
+//! (this process was descheduled) first runs the plant through the whole
+//! periods lost, holding its set-point, and stays on its tick grid: the
+//! robot's clock keeps wall time, as a real controller's does, and a stall
+//! shows as a jump of the stamps (counted in [`SimStats::periods_lost`]).
+//!
 //! Unpaced ([`Pacing::AsFastAsPossible`]) the next cycle starts as soon as
 //! the reply is in; a cycle whose datagram was not delivered lasts one
 //! send period of wall time, so a loss burst is silence on the client's
@@ -191,6 +197,10 @@ pub struct SimStats {
     pub round_trips_us: Vec<u32>,
     /// Inverse kinematics failures of the robot model (joints kept).
     pub inverse_failures: u64,
+    /// Paced: whole send periods this process lost to overruns (it was
+    /// descheduled), through which the robot's time ran on holding its
+    /// set-point, as a real controller's clock does.
+    pub periods_lost: u64,
 }
 
 /// Round-trip percentiles of on-time replies [µs].
@@ -651,10 +661,30 @@ impl SimController {
     pub fn run_cycle(&mut self) -> Result<(), SimError> {
         let period = Duration::from_millis(u64::from(self.settings.send_period_ms.clamp(1, 100)));
         let now = Instant::now();
-        // Paced: ticks on a fixed grid (no drift), re-anchored after an
-        // overrun of more than one period.
+        // Paced: ticks on a fixed grid (no drift), the periods an overrun
+        // lost run through by the plant.
+        let paced = self.settings.pacing == Pacing::RealTime;
         let cycle_start = match self.next_tick {
-            Some(tick) if self.settings.pacing == Pacing::RealTime && now < tick + period => tick,
+            Some(tick) if paced && now < tick + period => tick,
+            Some(tick) if paced => {
+                // Overrun: the robot's clock does not stop while this
+                // process is descheduled. The plant runs on through the
+                // whole periods lost, holding its set-point, so the stamps
+                // keep wall time (re-anchoring alone made them fall behind
+                // the host clock by every lost period, until the client's
+                // watchdog called the frames stale).
+                let lost = now.duration_since(tick).as_nanos() / period.as_nanos().max(1);
+                let lost = u32::try_from(lost).unwrap_or(u32::MAX);
+                limb_sim::closed_loop::advance(
+                    &mut self.plant,
+                    None,
+                    self.settings.period() * f64::from(lost),
+                );
+                self.stats.periods_lost += u64::from(lost);
+                // Back on the grid: the cycle that should have started in
+                // this period starts now.
+                tick + period * lost
+            }
             _ => now,
         };
         self.next_tick = Some(cycle_start + period);

@@ -290,6 +290,7 @@ fn session(
             "missed_with_delivery": stats.missed_with_delivery,
             "idle_cycles": idle,
             "stray_replies": stats.stray_replies,
+            "periods_lost_to_overruns": stats.periods_lost,
             "non_finite_replies": stats.non_finite_replies,
             "client_handled": client.handled,
             "client_answered": client.answered,
