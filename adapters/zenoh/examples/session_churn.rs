@@ -13,17 +13,18 @@ use std::sync::Arc;
 use std::time::Duration;
 use zenoh::Wait;
 
-/// VmHWM and VmRSS of this process [kB].
-fn memory() -> (u64, u64) {
+/// The VmHWM and VmRSS lines of this process's status, joined.
+fn memory() -> String {
     let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
-    let field = |name: &str| {
-        status
-            .lines()
-            .find_map(|line| line.strip_prefix(name))
-            .and_then(|rest| rest.trim().trim_end_matches("kB").trim().parse().ok())
-            .unwrap_or(0)
-    };
-    (field("VmHWM:"), field("VmRSS:"))
+    let lines: Vec<&str> = status
+        .lines()
+        .filter(|line| line.starts_with("VmHWM") || line.starts_with("VmRSS"))
+        .collect();
+    lines
+        .join(" ")
+        .split_whitespace()
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
@@ -31,7 +32,7 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
     let pairs: usize = args.next().map_or(Ok(100), |a| a.parse())?;
     let samples: usize = args.next().map_or(Ok(20_000), |a| a.parse())?;
     let received = Arc::new(AtomicU64::new(0));
-    println!("pair vm_hwm_kb vm_rss_kb received");
+    println!("pair, memory, samples received");
     for pair in 1..=pairs {
         let endpoint = format!("tcp/127.0.0.1:{}", free_loopback_port()?);
         let node = zenoh::open(peer_config(std::slice::from_ref(&endpoint), &[], 1000)?).wait()?;
@@ -55,11 +56,7 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
         node.close().wait()?;
         station.close().wait()?;
         if pair % 10 == 0 {
-            let (peak, resident) = memory();
-            println!(
-                "{pair} {peak} {resident} {}",
-                received.load(Ordering::Relaxed)
-            );
+            println!("{pair}, {}, {}", memory(), received.load(Ordering::Relaxed));
         }
     }
     Ok(())
