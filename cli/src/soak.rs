@@ -5,7 +5,8 @@
 //! disturbance (an FRI fault, an emergency stop) or none, over real
 //! sockets on loopback, for a wall-clock time. Every message is either
 //! answered or counted as missed, every disturbance must end in its named
-//! stop, and every kernel step must have its row in the session log. The
+//! stop, and every kernel step must have its row in the step log (every
+//! fresh one its row in the frame log). The
 //! output is one JSON object of counts; `--report FILE` also writes the
 //! figures into that Markdown file (`benchmarks/soak.md`), replacing the
 //! adapter's section.
