@@ -113,14 +113,37 @@ proptest! {
         prop_assert!(((fitted - value) / value).abs() < 0.1, "{} vs {}", fitted, value);
         prop_assert!(s.gap.shrink >= 0.8, "shrink {}", s.gap.shrink);
     }
+}
 
-    /// Pure noise earns no effect.
-    #[test]
-    fn noise_alone_is_none(seed: u64) {
+/// Pure noise seldom earns an effect: the held-out criterion has a small
+/// false-positive rate (a candidate's held-out gain on noise exceeds its
+/// k ln n penalty by chance), so the property is a rate over fixed seeds,
+/// not "never" (as a random-seed property it failed now and then: seed
+/// 3679207707835070750 was called `gain`, about one CI run in nine).
+/// Measured: 2 of the 401 (seed 319 and that seed, both `gain`); the bound
+/// is the 2 % the diagnosis allows for clean logs.
+#[test]
+fn noise_alone_is_seldom_accused() {
+    const SEEDS: u64 = 400;
+    let mut accused = Vec::new();
+    for seed in (0..SEEDS).chain([3_679_207_707_835_070_750]) {
         let (effect, shrink) = answer(&Toy::new(&[], seed));
-        prop_assert_eq!(effect, None);
-        prop_assert_eq!(shrink, 0.0);
+        match effect {
+            None => assert_eq!(shrink, 0.0, "seed {seed}: no effect but shrink {shrink}"),
+            Some(effect) => accused.push((seed, effect)),
+        }
     }
+    eprintln!(
+        "accused on pure noise: {} of {}: {accused:?}",
+        accused.len(),
+        SEEDS + 1
+    );
+    assert!(
+        accused.len() as u64 * 50 <= SEEDS + 1,
+        "{} of {} pure-noise toys accused: {accused:?}",
+        accused.len(),
+        SEEDS + 1
+    );
 }
 
 #[test]
