@@ -235,6 +235,28 @@ fn a_failed_write_latches_the_safe_stop() {
     assert_eq!(session.state(), SessionState::SafeStop(StopCause::PortLost));
 }
 
+/// A simulated device on a new pseudo-terminal streaming the accuracy
+/// motion (seed 3) at 1 kHz, its faults switchable.
+fn accuracy_device() -> (
+    link::PseudoTerminal,
+    FaultSwitch,
+    std::thread::JoinHandle<link::DeviceRecord>,
+) {
+    let pty = link::pseudo_terminal().unwrap();
+    let faults = FaultSwitch::default();
+    let motion = sim::accuracy_motion(3);
+    let device = link::spawn_device(
+        pty.device.try_clone_native().unwrap(),
+        Setup::default(),
+        Box::new(move |t| motion.at(t)),
+        4000,
+        Duration::from_millis(1),
+        faults.clone(),
+    )
+    .unwrap();
+    (pty, faults, device)
+}
+
 fn poll_for(session: &mut Session, seconds: f64) -> usize {
     let end = Instant::now() + Duration::from_secs_f64(seconds);
     let mut frames = 0;
@@ -250,18 +272,7 @@ fn poll_for(session: &mut Session, seconds: f64) -> usize {
 #[test]
 fn faults_over_the_pty() {
     for final_fault in [DeviceFault::Stall, DeviceFault::Unplug] {
-        let pty = link::pseudo_terminal().unwrap();
-        let faults = FaultSwitch::default();
-        let motion = sim::accuracy_motion(3);
-        let device = link::spawn_device(
-            pty.device.try_clone_native().unwrap(),
-            Setup::default(),
-            Box::new(move |t| motion.at(t)),
-            4000,
-            Duration::from_millis(1),
-            faults.clone(),
-        )
-        .unwrap();
+        let (pty, faults, device) = accuracy_device();
         let mut session = Session::open(&pty.path, SafetyLimits::default()).unwrap();
         assert!(poll_for(&mut session, 0.3) > 50);
         faults.set(DeviceFault::Garbage);
@@ -368,18 +379,7 @@ fn frames_of_another_length_are_counted() {
 #[test]
 fn a_backlog_after_a_host_stall_and_a_frozen_device_clock_are_stale() {
     for frozen in [false, true] {
-        let pty = link::pseudo_terminal().unwrap();
-        let faults = FaultSwitch::default();
-        let motion = sim::accuracy_motion(3);
-        let device = link::spawn_device(
-            pty.device.try_clone_native().unwrap(),
-            Setup::default(),
-            Box::new(move |t| motion.at(t)),
-            4000,
-            Duration::from_millis(1),
-            faults.clone(),
-        )
-        .unwrap();
+        let (pty, faults, device) = accuracy_device();
         let mut session = Session::open(&pty.path, SafetyLimits::default()).unwrap();
         assert!(poll_for(&mut session, 0.3) > 50);
         assert_eq!(session.state(), SessionState::Running);
