@@ -201,6 +201,25 @@ pub struct SimStats {
     /// descheduled), through which the robot's time ran on holding its
     /// set-point, as a real controller's clock does.
     pub periods_lost: u64,
+    /// The latest cycles at which this machine disturbed the loop's timing,
+    /// oldest first, at most [`DISTURBANCE_MEMORY`]: for a soak to tell a
+    /// stop the machine caused from one it did not.
+    pub disturbances: VecDeque<Disturbance>,
+}
+
+/// How many [`Disturbance`]s [`SimStats::disturbances`] keeps.
+pub const DISTURBANCE_MEMORY: usize = 256;
+
+/// A cycle whose timing this machine, not an injected fault, disturbed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Disturbance {
+    /// Controller cycle (0-based, as [`SimStats::cycles`] counts them).
+    pub cycle: u64,
+    /// Whole send periods lost to an overrun before this cycle (paced).
+    pub periods_lost: u32,
+    /// The reply to this cycle's intact, delivered datagram missed its
+    /// deadline.
+    pub reply_missed: bool,
 }
 
 /// Round-trip percentiles of on-time replies [µs].
@@ -459,6 +478,15 @@ impl SimController {
         }
     }
 
+    /// Records a timing disturbance, forgetting the oldest beyond
+    /// [`DISTURBANCE_MEMORY`].
+    fn disturbed(&mut self, disturbance: Disturbance) {
+        if self.stats.disturbances.len() == DISTURBANCE_MEMORY {
+            self.stats.disturbances.pop_front();
+        }
+        self.stats.disturbances.push_back(disturbance);
+    }
+
     /// Applies the cycle's faults to `datagram`; returns the datagrams to
     /// send now and whether this cycle's datagram is among them intact.
     fn inject(&mut self, faults: &ActiveFaults, mut datagram: Vec<u8>) -> (Vec<Vec<u8>>, bool) {
@@ -681,6 +709,11 @@ impl SimController {
                     self.settings.period() * f64::from(lost),
                 );
                 self.stats.periods_lost += u64::from(lost);
+                self.disturbed(Disturbance {
+                    cycle: self.cycle,
+                    periods_lost: lost,
+                    reply_missed: false,
+                });
                 // Back on the grid: the cycle that should have started in
                 // this period starts now.
                 tick + period * lost
@@ -734,6 +767,13 @@ impl SimController {
         if expecting && reply.is_none() {
             self.stats.missed_cycles += 1;
             self.stats.missed_with_delivery += u64::from(delivered);
+            if delivered {
+                self.disturbed(Disturbance {
+                    cycle: self.cycle,
+                    periods_lost: 0,
+                    reply_missed: true,
+                });
+            }
         }
         if expecting {
             self.misses.push_back(reply.is_none());

@@ -108,6 +108,19 @@ fn the_simulated_robot_clock_keeps_wall_time_through_a_stall() {
         "{:?}",
         controller.stats().periods_lost
     );
+    // The stall is on record as the machine's disturbance, at the cycle
+    // after it (the soak's evidence for a stop the machine caused).
+    let stall = controller
+        .stats()
+        .disturbances
+        .iter()
+        .find(|d| d.periods_lost >= 24)
+        .copied();
+    assert!(
+        stall.is_some_and(|d| d.cycle == 10 && !d.reply_missed),
+        "{:?}",
+        controller.stats().disturbances
+    );
     assert!(
         (wall - robot).abs() <= 0.01,
         "robot time {robot:.4} s, wall time {wall:.4} s"

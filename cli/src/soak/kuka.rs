@@ -23,7 +23,7 @@ use limb_kuka::faults::{FaultKind, FaultSchedule, ScheduledFault};
 use limb_kuka::loopback::run_loopback_observed;
 use limb_kuka::messages::SessionState;
 use limb_kuka::robot::FriRobot;
-use limb_kuka::sim_controller::{Pacing, SimSettings};
+use limb_kuka::sim_controller::{Pacing, SimSettings, SimStats};
 use limb_kuka::FriVersion;
 use limb_session::operator::completes_session;
 use limb_session::{Observer, Operator, SessionPlan};
@@ -41,6 +41,13 @@ const SESSION_CYCLES: u64 = 27_000;
 /// Cycles after a ridden-through fault's window within which a stop is
 /// still blamed on it.
 const AFTERMATH: u64 = 200;
+/// Paced: cycles before a stop within which a timing disturbance of the
+/// machine (periods lost to an overrun, a reply to a delivered datagram
+/// missed) is taken as the stop's cause. The longest reach of such a
+/// disturbance: the controller's quality window (100 cycles of misses make
+/// the robot stop following); the force-rate monitor's window (50 ms) and
+/// the client's watchdog (20 ms) are shorter.
+const LOAD_WINDOW: u64 = limb_kuka::sim_controller::QUALITY_WINDOW as u64;
 
 /// What a fault must end in.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -136,6 +143,40 @@ struct Session {
     stale_steps: u64,
     missed: u64,
     unaccounted_cycles: i64,
+    /// The machine's timing disturbances in the [`LOAD_WINDOW`] cycles
+    /// before the session ended.
+    load_before_end: LoadEvidence,
+}
+
+/// Timing disturbances of the machine in a window of cycles.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct LoadEvidence {
+    /// Send periods lost to overruns.
+    periods_lost: u64,
+    /// Replies to delivered datagrams that missed their deadline.
+    replies_missed: u64,
+}
+
+impl LoadEvidence {
+    /// The disturbances of `stats` within [`LOAD_WINDOW`] cycles before
+    /// `end` (none when the end is unknown).
+    fn before(stats: &SimStats, end: Option<u64>) -> Self {
+        let Some(end) = end else {
+            return Self::default();
+        };
+        stats
+            .disturbances
+            .iter()
+            .filter(|d| d.cycle <= end && d.cycle + LOAD_WINDOW >= end)
+            .fold(Self::default(), |sum, d| Self {
+                periods_lost: sum.periods_lost + u64::from(d.periods_lost),
+                replies_missed: sum.replies_missed + u64::from(d.reply_missed),
+            })
+    }
+
+    fn any(&self) -> bool {
+        self.periods_lost + self.replies_missed > 0
+    }
 }
 
 /// How a session's fault ended, judged against what it must end in.
@@ -153,8 +194,8 @@ enum Verdict {
     /// Not reached: the session completed or stopped first, or the soak
     /// ended.
     NotReached,
-    /// Ended otherwise: a defect, or a stop the machine's load caused
-    /// (a StaleSensor stop outside the fault's doing).
+    /// Ended otherwise: a defect or, paced, a stop after the machine
+    /// disturbed the loop's timing ([`LoadEvidence`]).
     Otherwise,
 }
 
@@ -207,6 +248,8 @@ impl Session {
             "kernel_steps": self.steps,
             "stale_steps": self.stale_steps,
             "unaccounted_cycles": self.unaccounted_cycles,
+            "periods_lost_before_end": self.load_before_end.periods_lost,
+            "replies_missed_before_end": self.load_before_end.replies_missed,
         });
         if let (Value::Object(fields), Value::Object(counts)) = (&mut record, &self.record) {
             fields.extend(counts.iter().map(|(k, v)| (k.clone(), v.clone())));
@@ -304,6 +347,7 @@ fn session(
         stale_steps: run.outcome.stale_steps,
         missed: stats.missed_cycles,
         unaccounted_cycles,
+        load_before_end: LoadEvidence::before(stats, ended_at),
     })
 }
 
@@ -370,13 +414,6 @@ pub fn soak(budget: &Budget, seed: u64, options: &Options) -> Result<Soak, CliEr
     Ok(judge.finish(&memory))
 }
 
-/// Stops the machine's load can cause when paced: a late frame
-/// (StaleSensor), or missed replies that make the robot stop following
-/// (request Stop).
-fn load_can_cause(stop: &str) -> bool {
-    matches!(stop, "StaleSensor" | "request Stop")
-}
-
 /// The verdicts so far.
 #[derive(Default)]
 struct Judge {
@@ -384,7 +421,7 @@ struct Judge {
     ledger: Ledger,
     by_fault: BTreeMap<String, BTreeMap<String, u64>>,
     unprovoked: BTreeMap<String, u64>,
-    load_suspected: u64,
+    machine_caused: BTreeMap<String, u64>,
     completed: u64,
     fault_free_cycles: u64,
     fault_free_missed: u64,
@@ -421,8 +458,12 @@ impl Judge {
             if unmade {
                 *self.unprovoked.entry(stop.clone()).or_default() += 1;
             }
-            if !self.unpaced && load_can_cause(stop) {
-                self.load_suspected += 1;
+            // Paced, a stop no fault made is the machine's when its timing
+            // was disturbed just before (any stop: a late frame, the robot
+            // no longer following, the catch-up's force transient);
+            // without that evidence it is a loss.
+            if !self.unpaced && s.load_before_end.any() {
+                *self.machine_caused.entry(stop.clone()).or_default() += 1;
             } else {
                 let injected = s.state_at_fault.map_or("not injected".into(), |state| {
                     format!("injected in {state:?}")
@@ -448,8 +489,98 @@ impl Judge {
             "cycles_fault_free_sessions": self.fault_free_cycles,
             "faults": self.by_fault,
             "stops_not_caused_by_an_injected_fault": self.unprovoked,
-            "stops_the_load_can_cause_not_made_by_their_fault": self.load_suspected,
+            "stops_after_the_machine_disturbed_the_timing": self.machine_caused,
         });
         self.ledger.finish("kuka", figures, memory)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use limb_kuka::sim_controller::Disturbance;
+
+    fn stats_with(disturbances: &[(u64, u32, bool)]) -> SimStats {
+        SimStats {
+            disturbances: disturbances
+                .iter()
+                .map(|&(cycle, periods_lost, reply_missed)| Disturbance {
+                    cycle,
+                    periods_lost,
+                    reply_missed,
+                })
+                .collect(),
+            ..SimStats::default()
+        }
+    }
+
+    /// A fault-free session that stopped on `stop` at cycle 5 000, with
+    /// the machine's disturbances before it.
+    fn stopped(stop: &str, evidence: LoadEvidence) -> Session {
+        Session {
+            fault: None,
+            expect: None,
+            state_at_fault: None,
+            ended_at: Some(5_000),
+            stop: Some(stop.into()),
+            completed: false,
+            record: json!({ "cycles": 5_000 }),
+            rows: LogRows {
+                frames: 5_000,
+                steps: 5_000,
+            },
+            steps: 5_000,
+            stale_steps: 0,
+            missed: 0,
+            unaccounted_cycles: 0,
+            load_before_end: evidence,
+        }
+    }
+
+    #[test]
+    fn only_disturbances_in_the_window_before_the_end_are_evidence() {
+        let stats = stats_with(&[(100, 40, false), (4_899, 2, false), (4_950, 0, true)]);
+        let evidence = LoadEvidence::before(&stats, Some(5_000));
+        assert_eq!(
+            evidence,
+            LoadEvidence {
+                periods_lost: 0,
+                replies_missed: 1
+            }
+        );
+        let evidence = LoadEvidence::before(&stats, Some(4_999));
+        assert_eq!(evidence.periods_lost, 2);
+        // After the end: not a cause.
+        assert!(!LoadEvidence::before(&stats, Some(4_000)).any());
+        assert!(!LoadEvidence::before(&stats, None).any());
+    }
+
+    /// Paced, a stop no fault made is the machine's only with evidence;
+    /// unpaced, never.
+    #[test]
+    fn a_stop_no_fault_made_is_excused_only_by_the_machines_disturbance() {
+        let disturbed = LoadEvidence {
+            periods_lost: 300,
+            replies_missed: 0,
+        };
+        let outcome = |unpaced: bool, evidence: LoadEvidence, stop: &str| {
+            let mut judge = Judge {
+                unpaced,
+                ..Judge::default()
+            };
+            judge.add(0, &stopped(stop, evidence));
+            let soak = judge.finish(&MemoryWatch::default());
+            (
+                soak.figures["losses_counted"].as_u64().unwrap(),
+                soak.figures["stops_after_the_machine_disturbed_the_timing"][stop].as_u64(),
+            )
+        };
+        assert_eq!(outcome(false, disturbed, "ForceRate"), (0, Some(1)));
+        assert_eq!(outcome(false, disturbed, "request Stop"), (0, Some(1)));
+        assert_eq!(
+            outcome(false, LoadEvidence::default(), "StaleSensor"),
+            (1, None)
+        );
+        assert_eq!(outcome(true, disturbed, "ForceRate"), (1, None));
     }
 }
