@@ -240,6 +240,34 @@ mod tests {
         );
     }
 
+    /// The shoulder singularity is a reach within the lengths' own
+    /// rounding (ε · l1): an elbow exactly on the shoulder has no
+    /// direction, one 0.22 fm off it still has one.
+    #[test]
+    fn only_an_elbow_within_rounding_of_the_shoulder_is_singular() {
+        let arm = arm(0.3, 0.2);
+        assert_eq!(
+            arm.inverse_from_pose(Pose::new(0.3, 0.0, 0.0)),
+            Err(KinematicsError::AtShoulder)
+        );
+        // x + l2 = 0.5 m + 2 ulp: the elbow 2.2e-16 m beyond the shoulder.
+        let (q, residual) = arm
+            .inverse_from_pose(Pose::new(0.300_000_000_000_000_2, 0.0, 0.0))
+            .unwrap();
+        assert!(q.is_finite() && residual < 0.31, "{q:?} {residual}");
+    }
+
+    #[test]
+    fn joint_angles_are_finite_only_when_both_are() {
+        let q = |shoulder_elevation, elbow_flexion| JointAngles {
+            shoulder_elevation,
+            elbow_flexion,
+        };
+        assert!(q(0.1, -0.2).is_finite());
+        assert!(!q(f64::NAN, 0.0).is_finite());
+        assert!(!q(0.0, f64::INFINITY).is_finite());
+    }
+
     proptest! {
         #[test]
         fn pose_inverse_round_trips(l1 in 0.2..0.4f64, l2 in 0.15..0.3f64,
