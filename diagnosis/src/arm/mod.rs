@@ -303,8 +303,15 @@ const LENGTH_DIFFERENCE: f64 = 2e-4;
 #[derive(Debug)]
 struct Linearisation {
     reference: (f64, f64),
+    /// The reference was solved with a grasp slip among the effects: it is
+    /// the arm before the slip.
+    before_slip: bool,
     jacobian: [Series; 2],
 }
+
+/// Name of the effect whose prediction is anchored apart (see
+/// [`ArmModel::anchor`]).
+const GRASP_SLIP: &str = "grasp_slip";
 
 /// The reference plant compared with one log.
 pub struct ArmModel {
@@ -407,14 +414,15 @@ impl ArmModel {
         }
         if lengths == Lengths::Fitted {
             model
-                .linearise((l1, l2))
+                .linearise((l1, l2), false)
                 .map_err(|e| ArmError::Sim(e.to_string()))?;
         }
         Ok(model)
     }
 
-    /// Linearises the prediction around arm `reference`.
-    fn linearise(&self, reference: (f64, f64)) -> Result<(), ModelError> {
+    /// Linearises the prediction around arm `reference`, solved with a
+    /// grasp slip among the effects when `before_slip`.
+    fn linearise(&self, reference: (f64, f64), before_slip: bool) -> Result<(), ModelError> {
         let h = LENGTH_DIFFERENCE;
         let (l1, l2) = reference;
         let derivative = |(a, b): ((f64, f64), (f64, f64))| -> Result<Series, ModelError> {
@@ -439,6 +447,7 @@ impl ArmModel {
         if let Ok(mut slot) = self.linearisation.lock() {
             *slot = Some(Arc::new(Linearisation {
                 reference,
+                before_slip,
                 jacobian,
             }));
         }
@@ -463,11 +472,49 @@ impl ArmModel {
         }
     }
 
-    /// The exact prediction of `applied` (no base) at the reference arm
-    /// (cached).
+    /// Where the exact prediction of `applied` (no base) is anchored: the
+    /// reference arm, except for a grasp slip predicted around a reference
+    /// solved without one. Such a reference is the arm the whole log pulls
+    /// to: a least-squares fit of the forearm to a log whose forearm is l2
+    /// before the slip and l2 + shift after it lands near l2 + shift · f,
+    /// f the share of the forearm's information (Σ (∂P/∂l2)² / σ² over
+    /// the samples) after the slip. Predicting the slip at that arm would
+    /// put the forearm after the slip `shift` · (1 − f) too long and leave
+    /// the linearisation to bridge a centimetre; anchored at l2 − shift ·
+    /// f, the slip's own prediction starts from the forearm before it.
+    fn anchor(&self, lin: &Linearisation, applied: &[&Applied]) -> (f64, f64) {
+        let slip = applied.iter().find_map(|a| {
+            let candidate = self.data.candidates.get(a.candidate)?;
+            match (candidate.name, a.values.as_slice()) {
+                (GRASP_SLIP, [shift, at]) => Some((*shift, *at)),
+                _ => None,
+            }
+        });
+        let Some((shift, at)) = slip.filter(|_| !lin.before_slip) else {
+            return lin.reference;
+        };
+        let scales = &self.data.scales;
+        let (mut after, mut all) = (0.0, 0.0);
+        for (i, time) in self.data.times.iter().enumerate() {
+            let information: f64 = lin.jacobian[1]
+                .row(i)
+                .iter()
+                .zip(scales)
+                .map(|(j, sigma)| (j / sigma).powi(2))
+                .sum();
+            all += information;
+            if *time >= at {
+                after += information;
+            }
+        }
+        let share = if all > 0.0 { after / all } else { 0.0 };
+        (lin.reference.0, lin.reference.1 - shift * share)
+    }
+
+    /// The exact prediction of `applied` (no base) at `anchor` (cached).
     fn at_reference(
         &self,
-        lin: &Linearisation,
+        anchor: (f64, f64),
         applied: &[&Applied],
     ) -> Result<Arc<Series>, ModelError> {
         let key: Vec<Applied> = applied.iter().map(|a| (*a).clone()).collect();
@@ -476,7 +523,7 @@ impl ArmModel {
                 return Ok(Arc::clone(p));
             }
         }
-        let prediction = Arc::new(self.exact(lin.reference, applied)?);
+        let prediction = Arc::new(self.exact(anchor, applied)?);
         if let Ok(mut cache) = self.predictions.lock() {
             if cache.len() >= CACHED_PREDICTIONS {
                 cache.remove(0);
@@ -691,8 +738,9 @@ impl Model for ArmModel {
         let Some(lin) = self.current_linearisation() else {
             return self.exact(arm, &applied);
         };
-        let at = self.at_reference(&lin, &applied)?;
-        let delta = [arm.0 - lin.reference.0, arm.1 - lin.reference.1];
+        let anchor = self.anchor(&lin, &applied);
+        let at = self.at_reference(anchor, &applied)?;
+        let delta = [arm.0 - anchor.0, arm.1 - anchor.1];
         let mut out = Series::with_capacity(at.signals(), at.samples());
         let mut row = vec![0.0; at.signals()];
         for i in 0..at.samples() {
@@ -712,7 +760,8 @@ impl Model for ArmModel {
         let base = self.base()?;
         let lin = self.current_linearisation()?;
         let (_, effects) = self.arm_of(applied);
-        let at = self.at_reference(&lin, &effects).ok()?;
+        let anchor = self.anchor(&lin, &effects);
+        let at = self.at_reference(anchor, &effects).ok()?;
         let observed = &self.data.observed;
         let scales = &self.data.scales;
         let (mut a, mut b) = ([[0.0f64; 2]; 2], [0.0f64; 2]);
@@ -744,7 +793,7 @@ impl Model for ArmModel {
             (a[0][0] * b[1] - a[1][0] * b[0]) / det,
         ];
         let parameters = &self.data.candidates[base].parameters;
-        let values: Vec<f64> = [lin.reference.0, lin.reference.1]
+        let values: Vec<f64> = [anchor.0, anchor.1]
             .iter()
             .zip(delta)
             .zip(parameters)
@@ -768,11 +817,17 @@ impl Model for ArmModel {
         if self.lengths != Lengths::Fitted {
             return false;
         }
-        let (arm, _) = self.arm_of(applied);
+        let (arm, effects) = self.arm_of(applied);
+        let before_slip = effects.iter().any(|a| {
+            self.data
+                .candidates
+                .get(a.candidate)
+                .is_some_and(|c| c.name == GRASP_SLIP)
+        });
         let same = self
             .current_linearisation()
-            .is_some_and(|l| l.reference == arm);
-        same || self.linearise(arm).is_ok()
+            .is_some_and(|l| l.reference == arm && l.before_slip == before_slip);
+        same || self.linearise(arm, before_slip).is_ok()
     }
 
     fn starts(&self, candidate: usize, hints: &Hints) -> Vec<Vec<f64>> {
@@ -823,7 +878,10 @@ impl Model for ArmModel {
             // At the residual's onset (the sim's arm is the arm before
             // the slip) and just before its end (the fitted arm is the
             // arm after the slip, so the residual lies before it).
-            ("grasp_slip", [shift, at]) => {
+            // And at the forearm's change point (see `forearm_change`),
+            // with the change it implies: a slip in mid-log leaves the
+            // residual beyond the noise from start to end.
+            (GRASP_SLIP, [shift, at]) => {
                 let mut anchors: Vec<f64> = Vec::new();
                 if let Some(onset) = hints.onset {
                     anchors.extend([0.0, 0.15, 0.3].map(|d| onset + d));
@@ -831,17 +889,26 @@ impl Model for ArmModel {
                 if let Some(end) = hints.end {
                     anchors.extend([-0.6, -0.3, 0.0].map(|d| end + d));
                 }
-                if anchors.is_empty() {
+                let change = self.forearm_change();
+                if anchors.is_empty() && change.is_none() {
                     return grid(2, 5);
                 }
-                anchors
+                let shifts = [-0.03, -0.01, -0.003, 0.003, 0.01, 0.03];
+                let mut starts: Vec<Vec<f64>> = anchors
                     .iter()
                     .flat_map(|time| {
                         let au = at.unit_of(*time);
-                        [-0.03, -0.01, -0.003, 0.003, 0.01, 0.03]
-                            .map(|s| vec![shift.unit_of(s), au])
+                        shifts.map(|s| vec![shift.unit_of(s), au])
                     })
-                    .collect()
+                    .collect();
+                if let Some((time, change)) = change {
+                    for t in [-0.05, 0.0, 0.05].map(|d| time + d) {
+                        let au = at.unit_of(t);
+                        starts.push(vec![shift.unit_of(change), au]);
+                        starts.extend(shifts.map(|s| vec![shift.unit_of(s), au]));
+                    }
+                }
+                starts
             }
             ("quantization", [pos, ang]) => {
                 // Rounded readings sit on a lattice: its spacing is the
@@ -859,6 +926,59 @@ impl Model for ArmModel {
             (_, [_, _]) if measurement_side => grid(2, 11),
             (_, parameters) => grid(parameters.len(), if parameters.len() <= 1 { 9 } else { 5 }),
         }
+    }
+}
+
+impl ArmModel {
+    /// Where the forearm of the log most likely changes, and by how much:
+    /// the residual of the prediction at the reference arm, split at each
+    /// sample into a part before and a part after, each fitted by a
+    /// change of the forearm alone along the length Jacobian (∂P/∂l2, per
+    /// signal over σ); the split that explains the most gives the time
+    /// [s] and the change [m] (after less before). `None` without a
+    /// linearisation or a split with information on both sides. Start
+    /// points only, from the whole log like the engine's hints: the fit
+    /// and its score do not depend on it beyond where the search begins.
+    fn forearm_change(&self) -> Option<(f64, f64)> {
+        let lin = self.current_linearisation()?;
+        let nominal = self.at_reference(lin.reference, &[]).ok()?;
+        let (observed, scales) = (&self.data.observed, &self.data.scales);
+        let samples = nominal.samples().min(observed.samples());
+        let (mut along, mut information) = (vec![0.0; samples], vec![0.0; samples]);
+        for i in 0..samples {
+            let rows = lin.jacobian[1].row(i).iter().zip(nominal.row(i));
+            for ((j, p), (o, sigma)) in rows.zip(observed.row(i).iter().zip(scales)) {
+                let (j, r) = (j / sigma, (o - p) / sigma);
+                if j.is_finite() && r.is_finite() {
+                    along[i] += j * r;
+                    information[i] += j * j;
+                }
+            }
+        }
+        let (total_along, total_information): (f64, f64) =
+            (along.iter().sum(), information.iter().sum());
+        let least = 0.01 * total_information;
+        let (mut before_along, mut before_information) = (0.0, 0.0);
+        let mut best: Option<(f64, usize, f64)> = None;
+        for k in 0..samples {
+            let (after_along, after_information) = (
+                total_along - before_along,
+                total_information - before_information,
+            );
+            if before_information > least && after_information > least {
+                let explained = before_along * before_along / before_information
+                    + after_along * after_along / after_information;
+                let change = after_along / after_information - before_along / before_information;
+                if best.is_none_or(|(e, _, _)| explained > e) {
+                    best = Some((explained, k, change));
+                }
+            }
+            before_along += along[k];
+            before_information += information[k];
+        }
+        let (_, k, change) = best?;
+        let time = *self.data.times.get(k)?;
+        (time.is_finite() && change.is_finite()).then_some((time, change))
     }
 }
 
