@@ -7,10 +7,9 @@
 
 use crate::error::{emit, print_json, CliError};
 use indicatif::{ProgressBar, ProgressStyle};
-use limb_diagnosis::arm::Lengths;
+use limb_diagnosis::plant::arm::blind::{self, Summary};
+use limb_diagnosis::plant::arm::{diagnose, Diagnosis, Lengths};
 use limb_diagnosis::report::{self, Subject};
-use limb_diagnosis::selfcheck::{self, Summary};
-use limb_diagnosis::verdict::{diagnose, Diagnosis};
 use limb_diagnosis::Progress;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -82,7 +81,7 @@ pub fn run(args: &DiagnoseArgs) -> Result<(), CliError> {
     let records =
         limb_sim::log::read(log).map_err(|error| CliError::BadInput(error.to_string()))?;
     let progress = bar(
-        limb_diagnosis::arm::candidates(0.0).len(),
+        limb_diagnosis::plant::arm::effects::candidates(0.0).len(),
         "candidates fitted",
     );
     let tell = |p: Progress| {
@@ -92,11 +91,11 @@ pub fn run(args: &DiagnoseArgs) -> Result<(), CliError> {
         }
     };
     let diagnosed = diagnose(lengths, &records, threads, &tell).map_err(|error| {
-        use limb_diagnosis::verdict::DiagnoseError as E;
+        use limb_diagnosis::plant::arm::DiagnoseError as E;
         let text = format!("{}: {error}", log.display());
         match error {
             E::Engine(_) | E::SelfCheck(_) => CliError::Internal(text),
-            E::Arm(limb_diagnosis::arm::ArmError::Sim(_)) => CliError::Internal(text),
+            E::Arm(limb_diagnosis::plant::arm::ArmError::Sim(_)) => CliError::Internal(text),
             E::Arm(_) | E::TooShort(_) => CliError::BadInput(text),
         }
     })?;
@@ -258,7 +257,7 @@ fn self_check(logs: usize, seed: u64, threads: usize, json: bool) -> Result<(), 
         ));
     }
     let progress = bar(logs, "logs diagnosed");
-    let summary = selfcheck::run(logs, seed, threads, &|case| {
+    let summary = blind::run(logs, seed, threads, &|case| {
         if let Some(bar) = &progress {
             bar.inc(1);
             bar.set_message(format!("{:?} -> {:?}", case.truth, case.added));

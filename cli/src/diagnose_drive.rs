@@ -8,7 +8,7 @@
 //! * `limb diagnose-drive FIT.csv [--json]`: alternating 1 s blocks of FIT
 //!   are held out (the output says so).
 //! * `limb diagnose-drive --self-check N [--seed S] [--json]`: the blind
-//!   self-check on simulated drives (see `limb_diagnosis::drive::blind`).
+//!   self-check on simulated drives (see `limb_diagnosis::plant::drive::blind`).
 //!
 //! Bad input (an unreadable or malformed log, logs that differ in their
 //! columns, a log too short to hold out, a bad flag) is one line on stderr
@@ -16,9 +16,9 @@
 
 use crate::diagnose::write_report;
 use crate::error::{emit, print_json, CliError};
-use limb_diagnosis::drive::blind;
-use limb_diagnosis::drive::outcome::{Diagnosis, Run, MAX_EFFECTS};
-use limb_diagnosis::drive::{diagnose, read, DriveError, CUTOFF};
+use limb_diagnosis::plant::drive::blind;
+use limb_diagnosis::plant::drive::outcome::{Diagnosis, Run, MAX_EFFECTS};
+use limb_diagnosis::plant::drive::{diagnose, read, DriveError, CUTOFF};
 use limb_diagnosis::report::Subject;
 use limb_diagnosis::Options;
 use std::fmt::Write as _;

@@ -13,8 +13,7 @@
 //! The log: `shared/data/effects/backlash.csv` (2 917 samples, 29.16 s).
 
 use criterion::Criterion;
-use limb_diagnosis::arm::{ArmModel, Lengths};
-use limb_diagnosis::verdict::diagnose;
+use limb_diagnosis::plant::arm::{diagnose, ArmModel, Lengths};
 use limb_diagnosis::Model;
 use std::hint::black_box;
 use std::time::Duration;

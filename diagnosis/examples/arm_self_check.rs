@@ -2,7 +2,7 @@
 //! --self-check N --seed S --json` prints), with every finished log as
 //! one JSON line on stderr, for a run left in the background:
 //! `cargo run --release -p limb-diagnosis --example arm_self_check -- N SEED [THREADS] > summary.json 2> progress.jsonl`.
-use limb_diagnosis::selfcheck::run;
+use limb_diagnosis::plant::arm::blind::run;
 use std::time::Instant;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

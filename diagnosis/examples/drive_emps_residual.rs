@@ -4,7 +4,7 @@
 //! run's own held-out residual, and its regression on the known external
 //! force at several lags.
 //! `cargo run --release -p limb-diagnosis --example drive_emps_residual`
-use limb_diagnosis::drive::{read, DriveModel, CUTOFF};
+use limb_diagnosis::plant::drive::{read, DriveModel, CUTOFF};
 use limb_diagnosis::{select, HoldOut, Model, Options, Problem};
 use rustfft::{num_complex::Complex, FftPlanner};
 

@@ -1,6 +1,6 @@
 //! The blind self-check of the drive diagnosis:
 //! `cargo run --release -p limb-diagnosis --example drive_self_check -- N SEED`.
-use limb_diagnosis::drive::blind::run;
+use limb_diagnosis::plant::drive::blind::run;
 use limb_diagnosis::Options;
 
 fn main() {

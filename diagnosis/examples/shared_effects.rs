@@ -6,8 +6,7 @@
 //! `cargo run --release -p limb-diagnosis --example shared_effects [NAME]`
 //! (with NAME, only the logs whose file name contains it)
 
-use limb_diagnosis::arm::Lengths;
-use limb_diagnosis::verdict::diagnose;
+use limb_diagnosis::plant::arm::{diagnose, Lengths};
 use std::path::Path;
 use std::time::Instant;
 

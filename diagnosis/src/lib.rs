@@ -4,7 +4,8 @@
 //! Data flow:
 //!
 //! ```text
-//! real log ──► Model (arm: the reference plant with the log's arm lengths)
+//! real log ──► Model (plant::arm: the reference plant with the log's arm
+//!                │ lengths; plant::drive: one axis's rigid inverse model)
 //!                │ predict(effects) → signals at every sample
 //!                ▼
 //! holdout ─► Problem { fit samples, held-out samples }
@@ -15,28 +16,29 @@
 //!                 ─► rank; forward selection while an effect earns its
 //!                    parameters; gap before/after on held-out data
 //!                ▼
-//! verdict::diagnose (the `limb diagnose` answer) · selfcheck (blind check)
+//! plant::*::outcome::diagnose (the answer) · plant::*::blind (blind check)
+//!                ▼
+//! report (the HTML page of either plant)
 //! ```
 //!
-//! [`drive`] is the second plant: one actuated axis against its rigid
-//! inverse model (`spec/drive.md`).
+//! [`plant`] holds the plants, one folder each with the same file roles:
+//! [`plant::arm`] (`plant.md`) and [`plant::drive`] (one actuated axis
+//! against its rigid inverse model, `spec/drive.md`).
 //!
 //! [`model`] is the only thing a plant provides; [`engine`], [`optimize`],
-//! [`holdout`], [`residual`] and [`locate`] know nothing of arms.
+//! [`holdout`], [`residual`], [`locate`] and [`report`] know nothing of
+//! arms or drives.
 
 #![forbid(unsafe_code)]
 
-pub mod arm;
-pub mod drive;
 pub mod engine;
 pub mod holdout;
 pub mod locate;
 pub mod model;
 pub mod optimize;
+pub mod plant;
 pub mod report;
 pub mod residual;
-pub mod selfcheck;
-pub mod verdict;
 
 pub use engine::{select, Options, Problem, Progress, Selection};
 pub use holdout::HoldOut;

@@ -6,7 +6,7 @@
 //! unmodelled effects it can add (each with bounded parameters) and
 //! predicts every signal at every sample for any set of effects. The
 //! engine never looks inside: the same code serves the arm plant of
-//! `plant.md` ([`crate::arm`]) and any other plant.
+//! `plant.md` ([`crate::plant::arm`]) and any other plant.
 
 use thiserror::Error;
 

@@ -2,8 +2,7 @@
 //! hold anything out, no commanded motion to replay, arm lengths that are
 //! not lengths, times the sim cannot step to.
 
-use limb_diagnosis::arm::{ArmError, Lengths};
-use limb_diagnosis::verdict::{diagnose, DiagnoseError};
+use limb_diagnosis::plant::arm::{diagnose, ArmError, DiagnoseError, Lengths};
 use limb_sim::log::Record;
 
 fn log() -> Vec<Record> {

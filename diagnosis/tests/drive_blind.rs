@@ -4,7 +4,7 @@
 //! (a none trial of this seed gains a spurious `latency`), so a
 //! regression in attribution, not the draw, fails it.
 
-use limb_diagnosis::drive::blind::run;
+use limb_diagnosis::plant::drive::blind::run;
 use limb_diagnosis::Options;
 
 #[test]

@@ -7,8 +7,8 @@
 //! held-out force gap shrinks by at least 85 %, the fitted M, Fv and Fc
 //! lie within 10 % of the authors' values, and what remains is localised.
 
-use limb_diagnosis::drive::outcome::{Run, MAX_EFFECTS};
-use limb_diagnosis::drive::{diagnose, read, CUTOFF};
+use limb_diagnosis::plant::drive::outcome::{Run, MAX_EFFECTS};
+use limb_diagnosis::plant::drive::{diagnose, read, CUTOFF};
 use limb_diagnosis::Options;
 use std::path::PathBuf;
 

@@ -5,9 +5,8 @@
 //! seed 7, whose peaks sit 14 % and 3.8 % off; a comb of ±2 % around the
 //! peak fitted them to 9 % and 46 % shrink.
 
-use limb_diagnosis::arm::Lengths;
-use limb_diagnosis::selfcheck::simulate;
-use limb_diagnosis::verdict::diagnose;
+use limb_diagnosis::plant::arm::blind::simulate;
+use limb_diagnosis::plant::arm::{diagnose, Lengths};
 use limb_sim::effects::Effect;
 
 fn fitted(l1: f64, l2: f64, seed: u64, amp: f64, freq: f64) -> (String, f64, f64, f64) {

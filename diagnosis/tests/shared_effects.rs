@@ -4,8 +4,7 @@
 //! the label's, the held-out gap shrinks, and the arm corrected for the
 //! effects is within 3 mm of the label's.
 
-use limb_diagnosis::arm::Lengths;
-use limb_diagnosis::verdict::diagnose;
+use limb_diagnosis::plant::arm::{diagnose, Lengths};
 use std::path::PathBuf;
 
 fn effects_dir() -> PathBuf {

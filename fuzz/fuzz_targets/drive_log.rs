@@ -1,11 +1,11 @@
-//! The drive-log reader (`limb_diagnosis::drive::log::parse`) on arbitrary
+//! The drive-log reader (`limb_diagnosis::plant::drive::log::parse`) on arbitrary
 //! text. No silent acceptance: an accepted log has at least `MIN_SAMPLES`
 //! rows, strictly increasing times, only finite values and equally long
 //! columns, and writing it back out reads back to the same log.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use limb_diagnosis::drive::log::{parse, to_csv, MIN_SAMPLES};
+use limb_diagnosis::plant::drive::log::{parse, to_csv, MIN_SAMPLES};
 
 fuzz_target!(|data: &[u8]| {
     let text = String::from_utf8_lossy(data);

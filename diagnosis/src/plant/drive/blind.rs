@@ -186,7 +186,7 @@ fn trial(seed: u64, truth: &[Truth], options: &Options) -> Trial {
 #[cfg(test)]
 mod tests {
     use super::{draw, EFFECTS};
-    use crate::drive::sim::Uniform;
+    use crate::plant::drive::sim::Uniform;
 
     #[test]
     fn every_effect_can_be_drawn() {

@@ -8,7 +8,7 @@
 //! lengths are fitted with them unless given; the answer reports the arm
 //! as corrected for the effects and what the effects leave unexplained.
 
-use crate::arm::{ArmError, ArmModel, Lengths};
+use super::model::{ArmError, ArmModel, Lengths};
 use crate::engine::{select, EngineError, Gap, Options, Problem, Progress, Ranked, Selection};
 use crate::holdout::{HoldOut, TooShort};
 use crate::locate::Location;

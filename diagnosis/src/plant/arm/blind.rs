@@ -7,7 +7,7 @@
 //! [`UPPER_ARMS`], l2 in [`FOREARMS`]); the effects' parameters from
 //! [`RANGES`]; and the noise seed. The reference plant (`limb-sim`, noise
 //! on) writes the log, ground truth is dropped, and
-//! [`crate::verdict::diagnose`] answers without the lengths. The check
+//! [`super::outcome::diagnose`] answers without the lengths. The check
 //! counts, over the single-effect and clean logs, the confusion matrix of
 //! the first effect added, top-1 accuracy, clean logs accused, `none`
 //! answers for effects larger than twice the noise floor (effect size:
@@ -21,10 +21,10 @@
 //! valid range; signed effects take either sign. Sampling is uniform in
 //! the logarithm where the range spans a decade or more.
 
-use crate::arm::{ArmModel, Lengths};
+use super::model::{ArmModel, Lengths};
+use super::outcome::{diagnose, DiagnoseError};
 use crate::engine::{parallel_map, Progress};
 use crate::model::{Applied, Model};
-use crate::verdict::{diagnose, DiagnoseError};
 use limb_sim::effects::{Effect, Effects, CATALOGUE};
 use limb_sim::log::Record;
 use limb_sim::noise::Gaussian;
