@@ -8,6 +8,7 @@
 //! engine never looks inside: the same code serves the arm plant of
 //! `plant.md` ([`crate::plant::arm`]) and any other plant.
 
+pub use limb_sim::effects::{Parameter, Scale};
 use thiserror::Error;
 
 /// One measured signal.
@@ -17,88 +18,6 @@ pub struct Signal {
     pub name: &'static str,
     /// SI unit of the signal.
     pub unit: &'static str,
-}
-
-/// How a parameter's search range is walked: evenly, or evenly in its
-/// logarithm (for quantities spanning decades: stiffness, friction).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Scale {
-    /// Evenly between `min` and `max`.
-    Linear,
-    /// Evenly in `ln` between `min > 0` and `max`.
-    Logarithmic,
-}
-
-/// One fitted parameter of a candidate effect, with its search range.
-///
-/// # Invariants
-/// `min < max`, both finite; `min > 0` for [`Scale::Logarithmic`]
-/// (checked by [`Parameter::is_valid`] and the models' tests).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Parameter {
-    /// Name as in the effect's definition and the output.
-    pub name: &'static str,
-    /// SI unit.
-    pub unit: &'static str,
-    /// Smallest value searched.
-    pub min: f64,
-    /// Largest value searched.
-    pub max: f64,
-    /// How the range is walked.
-    pub scale: Scale,
-}
-
-impl Parameter {
-    /// A parameter named `name` in `unit`, searched over [`min`, `max`]
-    /// by `scale`.
-    pub const fn new(
-        name: &'static str,
-        unit: &'static str,
-        min: f64,
-        max: f64,
-        scale: Scale,
-    ) -> Self {
-        Self {
-            name,
-            unit,
-            min,
-            max,
-            scale,
-        }
-    }
-
-    /// The invariants above hold.
-    pub fn is_valid(&self) -> bool {
-        self.min.is_finite()
-            && self.max.is_finite()
-            && self.min < self.max
-            && (self.scale == Scale::Linear || self.min > 0.0)
-    }
-
-    /// The value at unit coordinate `u` (projected onto [0, 1]).
-    pub fn value(&self, u: f64) -> f64 {
-        let u = if u.is_nan() { 0.5 } else { u.clamp(0.0, 1.0) };
-        match self.scale {
-            Scale::Linear => self.min + u * (self.max - self.min),
-            Scale::Logarithmic => (self.min.ln() + u * (self.max.ln() - self.min.ln())).exp(),
-        }
-    }
-
-    /// The unit coordinate of `value` (the inverse of [`Parameter::value`]
-    /// inside the range, projected onto [0, 1] outside it).
-    pub fn unit_of(&self, value: f64) -> f64 {
-        let u = match self.scale {
-            Scale::Linear => (value - self.min) / (self.max - self.min),
-            Scale::Logarithmic => {
-                (value.max(self.min).ln() - self.min.ln()) / (self.max.ln() - self.min.ln())
-            }
-        };
-        if u.is_nan() {
-            0.5
-        } else {
-            u.clamp(0.0, 1.0)
-        }
-    }
 }
 
 /// A candidate unmodelled effect: its name in the output and its

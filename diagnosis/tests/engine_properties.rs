@@ -4,7 +4,7 @@
 //! planted, the engine names it when it stands above the noise, answers
 //! `none` for pure noise, and measures the shrink on held-out blocks.
 
-use limb_diagnosis::model::{Applied, Candidate, Data, Parameter, Scale, Series, Signal};
+use limb_diagnosis::model::{Applied, Candidate, Data, Parameter, Series, Signal};
 use limb_diagnosis::{select, HoldOut, Model, ModelError, Options, Problem};
 use limb_sim::noise::Gaussian;
 use proptest::prelude::*;
@@ -37,13 +37,7 @@ impl Toy {
                 .push(&[t.sin() + extra + noise.sample(1.0)])
                 .unwrap();
         }
-        let parameter = |name| Parameter {
-            name,
-            unit: "1",
-            min: -10.0,
-            max: 10.0,
-            scale: Scale::Linear,
-        };
+        let parameter = |name| Parameter::new(name, "1", -10.0, 10.0, "planted effect's size");
         let candidates = ["offset", "gain", "drift"]
             .into_iter()
             .map(|name| Candidate {

@@ -7,9 +7,11 @@
 //! ([`Effect::parse`]) or from named values ([`Effect::new`]); both check
 //! every key is known, none is missing or repeated and every value lies in
 //! its documented range (no silent clamping). [`CATALOGUE`] lists each
-//! effect's parameters with unit and range, for a diagnosis engine that fits
-//! them. A list of effects becomes an [`Effects`] set (at most one of each)
-//! that [`crate::Plant::with_effects`] applies:
+//! effect's parameters ([`Parameter`]: unit, range, description), for a
+//! diagnosis engine that fits them; the engine's candidates use the same
+//! type with their search ranges. A list of effects becomes an
+//! [`Effects`] set (at most one of each) that
+//! [`crate::Plant::with_effects`] applies:
 //!
 //! * measurement side (change what `measure()` returns): `backlash`,
 //!   `quantization`, `latency`, `grasp_compliance`, `plane_tilt`;
@@ -44,23 +46,44 @@ pub use plane_tilt::PlaneTilt;
 pub use quantization::Quantization;
 pub use shoulder_drift::ShoulderDrift;
 
-/// One parameter of an effect: name, SI unit and allowed range (inclusive).
+/// How a parameter's range is walked by a search: evenly, or evenly in
+/// its logarithm (for quantities spanning decades: stiffness, friction).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Scale {
+    /// Evenly between `min` and `max`.
+    Linear,
+    /// Evenly in `ln` between `min > 0` and `max`.
+    Logarithmic,
+}
+
+/// One parameter: name, SI unit, range (inclusive), how a search walks
+/// the range, and what it is. In [`CATALOGUE`] the range is what `--set`
+/// allows; a diagnosis candidate carries its search range, inside the
+/// allowed one ([`Parameter::searched`]).
+///
+/// # Invariants
+/// `min <= max`, both finite; as a search range `min < max`, and
+/// `min > 0` for [`Scale::Logarithmic`] (checked by
+/// [`Parameter::is_valid`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Parameter {
     /// Name as in `--set NAME=VALUE` and the diagnosis output.
     pub name: &'static str,
     /// SI unit.
     pub unit: &'static str,
-    /// Smallest allowed value.
+    /// Smallest value (allowed, or searched).
     pub min: f64,
-    /// Largest allowed value.
+    /// Largest value (allowed, or searched).
     pub max: f64,
+    /// How a search walks the range.
+    pub scale: Scale,
     /// What it is.
     pub description: &'static str,
 }
 
 impl Parameter {
-    /// A parameter description.
+    /// A parameter named `name` in `unit` over [`min`, `max`], walked
+    /// linearly.
     pub const fn new(
         name: &'static str,
         unit: &'static str,
@@ -73,7 +96,64 @@ impl Parameter {
             unit,
             min,
             max,
+            scale: Scale::Linear,
             description,
+        }
+    }
+
+    /// The same parameter walked by `scale`.
+    pub const fn scaled(self, scale: Scale) -> Self {
+        Self { scale, ..self }
+    }
+
+    /// The same parameter searched over [`min`, `max`] by `scale` (a
+    /// diagnosis's search range, inside the allowed one).
+    pub const fn searched(self, min: f64, max: f64, scale: Scale) -> Self {
+        Self {
+            min,
+            max,
+            scale,
+            ..self
+        }
+    }
+
+    /// The invariants of a search range hold.
+    pub fn is_valid(&self) -> bool {
+        self.min.is_finite()
+            && self.max.is_finite()
+            && self.min < self.max
+            && (self.scale == Scale::Linear || self.min > 0.0)
+    }
+
+    /// The value at unit coordinate `u` (projected onto [0, 1]).
+    ///
+    /// With the `std` feature only: it uses the host's `ln` and `exp`, as
+    /// the diagnosis always has, so that its answers stay the same to the
+    /// last bit.
+    #[cfg(feature = "std")]
+    pub fn value(&self, u: f64) -> f64 {
+        let u = if u.is_nan() { 0.5 } else { u.clamp(0.0, 1.0) };
+        match self.scale {
+            Scale::Linear => self.min + u * (self.max - self.min),
+            Scale::Logarithmic => (self.min.ln() + u * (self.max.ln() - self.min.ln())).exp(),
+        }
+    }
+
+    /// The unit coordinate of `value` (the inverse of [`Parameter::value`]
+    /// inside the range, projected onto [0, 1] outside it). With the
+    /// `std` feature only, as [`Parameter::value`].
+    #[cfg(feature = "std")]
+    pub fn unit_of(&self, value: f64) -> f64 {
+        let u = match self.scale {
+            Scale::Linear => (value - self.min) / (self.max - self.min),
+            Scale::Logarithmic => {
+                (value.max(self.min).ln() - self.min.ln()) / (self.max.ln() - self.min.ln())
+            }
+        };
+        if u.is_nan() {
+            0.5
+        } else {
+            u.clamp(0.0, 1.0)
         }
     }
 }

@@ -14,83 +14,72 @@
 use crate::model::{Candidate, Parameter, Scale};
 use limb_kernel::estimation::{estimate_arm, Method};
 use limb_kernel::path::{is_due, PathSample, PATH_CAPACITY};
-use limb_sim::effects::descriptor;
+use limb_sim::effects::{
+    active_torque, backlash, descriptor, grasp_compliance, grasp_slip, joint_friction, latency,
+    mass_mismatch, plane_tilt, quantization, shoulder_drift,
+};
 use limb_sim::log::Record;
 
-fn parameter(
-    name: &'static str,
-    unit: &'static str,
-    min: f64,
-    max: f64,
-    scale: Scale,
-) -> Parameter {
-    Parameter {
-        name,
-        unit,
-        min,
-        max,
-        scale,
-    }
-}
-
-/// The candidates with their search ranges: inside the effect's range of
-/// `limb_sim::effects::CATALOGUE`, logarithmic for quantities spanning
-/// decades, starting just above zero where zero means "no effect".
+/// The candidates with their search ranges: each parameter is the
+/// effect's entry of `limb_sim::effects::CATALOGUE` searched over a range
+/// inside the allowed one, logarithmic for quantities spanning decades,
+/// starting just above zero where zero means "no effect".
 /// `grasp_slip.at` spans the log (`duration` seconds).
 pub fn candidates(duration: f64) -> Vec<Candidate> {
     use Scale::{Linear, Logarithmic};
-    let one = |name, parameters| Candidate { name, parameters };
+    let one = |name, allowed: &[Parameter], searched: &[(f64, f64, Scale)]| Candidate {
+        name,
+        parameters: allowed
+            .iter()
+            .zip(searched)
+            .map(|(p, &(min, max, scale))| p.searched(min, max, scale))
+            .collect(),
+    };
+    let log = |min, max| (min, max, Logarithmic);
     vec![
         one(
             "joint_friction",
-            vec![
-                parameter("coulomb", "N m", 0.002, 5.0, Logarithmic),
-                parameter("viscous", "N m s/rad", 0.002, 5.0, Logarithmic),
-            ],
+            &joint_friction::PARAMETERS,
+            &[log(0.002, 5.0), log(0.002, 5.0)],
         ),
-        one(
-            "backlash",
-            vec![parameter("width", "rad", 0.0005, 0.2, Logarithmic)],
-        ),
+        one("backlash", &backlash::PARAMETERS, &[log(0.0005, 0.2)]),
         one(
             "quantization",
-            vec![
-                parameter("pos", "m", 1e-5, 0.05, Logarithmic),
-                parameter("ang", "rad", 1e-4, 0.2, Logarithmic),
-            ],
+            &quantization::PARAMETERS,
+            &[log(1e-5, 0.05), log(1e-4, 0.2)],
         ),
-        one(
-            "latency",
-            vec![parameter("delay", "s", 0.0005, 0.5, Logarithmic)],
-        ),
+        one("latency", &latency::PARAMETERS, &[log(0.0005, 0.5)]),
         one(
             "grasp_compliance",
-            vec![parameter("k", "N/m", 50.0, 1e6, Logarithmic)],
+            &grasp_compliance::PARAMETERS,
+            &[log(50.0, 1e6)],
         ),
         one(
             "mass_mismatch",
-            vec![parameter("factor", "1", 0.2, 5.0, Logarithmic)],
+            &mass_mismatch::PARAMETERS,
+            &[log(0.2, 5.0)],
         ),
         one(
             "plane_tilt",
-            vec![parameter("angle", "rad", -1.0, 1.0, Linear)],
+            &plane_tilt::PARAMETERS,
+            &[(-1.0, 1.0, Linear)],
         ),
         one(
             "shoulder_drift",
-            vec![parameter("k", "N/m", 100.0, 1e6, Logarithmic)],
+            &shoulder_drift::PARAMETERS,
+            &[log(100.0, 1e6)],
         ),
         one(
             "active_torque",
-            vec![
-                parameter("amp", "N m", 0.005, 5.0, Logarithmic),
-                parameter("freq", "Hz", 0.05, 10.0, Logarithmic),
-            ],
+            &active_torque::PARAMETERS,
+            &[log(0.005, 5.0), log(0.05, 10.0)],
         ),
         one(
             "grasp_slip",
-            vec![
-                parameter("shift", "m", -0.05, 0.05, Linear),
-                parameter("at", "s", 0.0, duration.clamp(1.0, 60.0), Linear),
+            &grasp_slip::PARAMETERS,
+            &[
+                (-0.05, 0.05, Linear),
+                (0.0, duration.clamp(1.0, 60.0), Linear),
             ],
         ),
     ]
@@ -120,8 +109,8 @@ pub fn arm_candidate(start: Option<(f64, f64)>) -> Candidate {
     Candidate {
         name: ARM,
         parameters: vec![
-            parameter("l1", "m", a, b, Scale::Linear),
-            parameter("l2", "m", c, d, Scale::Linear),
+            Parameter::new("l1", "m", a, b, "upper-arm length"),
+            Parameter::new("l2", "m", c, d, "forearm length"),
         ],
     }
 }
@@ -178,4 +167,20 @@ pub fn candidates_match_catalogue(candidates: &[Candidate]) -> Result<(), String
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{arm_candidate, candidates, candidates_match_catalogue};
+
+    #[test]
+    fn candidates_are_searched_inside_the_catalogue() {
+        for duration in [0.0, 29.16, 90.0] {
+            assert_eq!(candidates_match_catalogue(&candidates(duration)), Ok(()));
+        }
+        for start in [None, Some((0.3, 0.2)), Some((0.06, 0.05))] {
+            let arm = arm_candidate(start);
+            assert!(arm.parameters.iter().all(|p| p.is_valid()), "{arm:?}");
+        }
+    }
 }

@@ -46,57 +46,96 @@ pub const RIGID: &str = "rigid";
 /// 1 mm; transmission stiffness from 100 N/m to 10⁹ N/m; dead bands from
 /// 1 µm to 10 mm.
 pub fn candidates(with_load: bool) -> Vec<Candidate> {
-    use Scale::{Linear, Logarithmic};
+    use Scale::Logarithmic;
     let one = |name, parameters| Candidate { name, parameters };
     let parameter = Parameter::new;
     let mut rigid = vec![
-        parameter("mass", "kg", 0.0, 1e4, Linear),
-        parameter("offset", "N", -1e5, 1e5, Linear),
+        parameter(
+            "mass",
+            "kg",
+            0.0,
+            1e4,
+            "moving mass (inertia of a rotary axis)",
+        ),
+        parameter(
+            "offset",
+            "N",
+            -1e5,
+            1e5,
+            "constant force (mean friction asymmetry, gravity)",
+        ),
     ];
     if with_load {
-        rigid.push(parameter("transmission_offset", "m", -1.0, 1.0, Linear));
+        rigid.push(parameter(
+            "transmission_offset",
+            "m",
+            -1.0,
+            1.0,
+            "constant difference q − q_load",
+        ));
     }
     let mut all = vec![
         one(RIGID, rigid),
         one(
             "viscous_friction",
-            vec![parameter("fv", "N s/m", 0.0, 1e5, Linear)],
+            vec![parameter(
+                "fv",
+                "N s/m",
+                0.0,
+                1e5,
+                "viscous friction coefficient",
+            )],
         ),
         one(
             "coulomb_friction",
-            vec![parameter("fc", "N", 0.0, 1e5, Linear)],
+            vec![parameter("fc", "N", 0.0, 1e5, "Coulomb friction level")],
         ),
         one(
             "asymmetric_friction",
             vec![
-                parameter("dc", "N", -1e5, 1e5, Linear),
-                parameter("dv", "N s/m", -1e5, 1e5, Linear),
+                parameter(
+                    "dc",
+                    "N",
+                    -1e5,
+                    1e5,
+                    "half the forward less backward Coulomb level",
+                ),
+                parameter(
+                    "dv",
+                    "N s/m",
+                    -1e5,
+                    1e5,
+                    "half the forward less backward viscous slope",
+                ),
             ],
         ),
         one(
             "stribeck_friction",
             vec![
-                parameter("fs", "N", 0.0, 1e5, Linear),
-                parameter("vs", "m/s", 1e-4, 1.0, Logarithmic),
+                parameter("fs", "N", 0.0, 1e5, "Stribeck excess at standstill"),
+                parameter("vs", "m/s", 1e-4, 1.0, "Stribeck velocity").scaled(Logarithmic),
             ],
         ),
         one(
             "latency",
-            vec![parameter("delay", "s", 1e-4, 0.2, Logarithmic)],
+            vec![
+                parameter("delay", "s", 1e-4, 0.2, "delay of the measured force")
+                    .scaled(Logarithmic),
+            ],
         ),
         one(
             "quantization",
-            vec![parameter("step", "m", 1e-8, 1e-3, Logarithmic)],
+            vec![parameter("step", "m", 1e-8, 1e-3, "encoder step").scaled(Logarithmic)],
         ),
     ];
     if with_load {
         all.push(one(
             "compliance",
-            vec![parameter("k", "N/m", 1e2, 1e9, Logarithmic)],
+            vec![parameter("k", "N/m", 1e2, 1e9, "transmission stiffness").scaled(Logarithmic)],
         ));
         all.push(one(
             "backlash",
-            vec![parameter("width", "m", 1e-6, 1e-2, Logarithmic)],
+            vec![parameter("width", "m", 1e-6, 1e-2, "transmission dead band").scaled(Logarithmic)],
         ));
     }
     all
