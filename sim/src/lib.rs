@@ -19,8 +19,12 @@
 //! Without its default `std` feature the crate is `no_std` (it needs
 //! `alloc` only for error texts, effect parsing and the latency buffer;
 //! a nominal session allocates nothing): the firmware runs the same plant
-//! on a Cortex-M7. All transcendental functions come from `libm` on every
-//! target, so host and target compute the same bits.
+//! on a Cortex-M7. All transcendental functions the plant uses come from
+//! `libm` on every target, so host and target compute the same bits. The
+//! diagnosis's helpers behind the `std` feature
+//! ([`effects::Parameter::value`], [`effects::Parameter::unit_of`],
+//! [`effects::measurement::measured`]) use the host's functions, as the
+//! diagnosis always has.
 
 #![cfg_attr(not(feature = "std"), no_std)]
 #![forbid(unsafe_code)]

@@ -18,6 +18,9 @@
 //! * dynamics side (change the plant): `joint_friction`, `mass_mismatch`,
 //!   `shoulder_drift`, `active_torque`, `grasp_slip`.
 //!
+//! [`measurement`] applies the measurement side to a noise-free record
+//! without the plant, as a diagnosis predicts it.
+//!
 //! With no effect the plant is bit-identical to the nominal one.
 
 use alloc::string::{String, ToString};
@@ -31,6 +34,7 @@ pub mod grasp_slip;
 pub mod joint_friction;
 pub mod latency;
 pub mod mass_mismatch;
+pub mod measurement;
 pub mod plane_tilt;
 pub mod quantization;
 pub mod shoulder_drift;

@@ -14,7 +14,8 @@
 //! The nominal sim is run once per arm (noise off; the last few arms are
 //! kept), keeping what the robot senses at every 0.5 ms step.
 //! Measurement-side effects (`backlash`, `quantization`, `latency`,
-//! `grasp_compliance`, `plane_tilt`) are then applied to that record in
+//! `grasp_compliance`, `plane_tilt`) are then applied to that record by
+//! limb-sim's measurement chain ([`limb_sim::effects::measurement`]) in
 //! the plant's own order (compliance and tilt, delay, backlash, rounding),
 //! which costs microseconds; dynamics-side effects (`joint_friction`,
 //! `mass_mismatch`, `shoulder_drift`, `active_torque`, `grasp_slip`)
@@ -26,11 +27,11 @@ use super::effects::{arm_candidate, candidates, kernel_estimate, resolution, ARM
 use super::replay::Replay;
 use crate::model::{grid, Applied, Data, Hints, Model, ModelError, Series, Signal};
 use limb_kernel::motion::SetPoint;
-use limb_sim::effects::{Effect, Effects, Quantization};
+use limb_sim::effects::measurement::{self, reading, Reading, MEASUREMENT_SIDE};
+use limb_sim::effects::{Effect, Effects};
 use limb_sim::log::Record;
 use limb_sim::{
-    Measurement, Plant, PlantParameters, ANGLE_NOISE, FORCE_NOISE, POSITION_NOISE, STEP,
-    TORQUE_NOISE,
+    Plant, PlantParameters, ANGLE_NOISE, FORCE_NOISE, POSITION_NOISE, STEP, TORQUE_NOISE,
 };
 use std::sync::{Arc, Mutex};
 use thiserror::Error;
@@ -68,21 +69,6 @@ pub enum ArmError {
     /// The nominal sim failed.
     #[error("the sim failed: {0}")]
     Sim(String),
-}
-
-/// Sensed channels of one instant: x, z, psi, y, fx, fz, ty.
-type Sensed = [f64; 7];
-
-fn sensed(m: &Measurement) -> Sensed {
-    [
-        m.pose.x,
-        m.pose.z,
-        m.pose.psi,
-        m.lateral,
-        m.wrench.fx,
-        m.wrench.fz,
-        m.wrench.ty,
-    ]
 }
 
 const ALL_SIGNALS: [Signal; 7] = [
@@ -124,17 +110,8 @@ const ALL_SCALES: [f64; 7] = [
     FORCE_NOISE,
     TORQUE_NOISE,
 ];
-/// Column of `y` in [`Sensed`] (dropped when the log has no `y`).
+/// Column of `y` in [`Reading`] (dropped when the log has no `y`).
 const LATERAL: usize = 3;
-
-/// Effects that only change what is measured.
-const MEASUREMENT_SIDE: [&str; 5] = [
-    "backlash",
-    "quantization",
-    "latency",
-    "grasp_compliance",
-    "plane_tilt",
-];
 
 /// Fitted lengths are snapped to this grid [m] (far below what any log
 /// resolves) so the same arm always finds its cached nominal record.
@@ -151,7 +128,7 @@ pub enum Lengths {
 }
 
 /// Nominal records of the arms asked for most recently, newest last.
-type NominalCache = Mutex<Vec<((u64, u64), Arc<Vec<Sensed>>)>>;
+type NominalCache = Mutex<Vec<((u64, u64), Arc<Vec<Reading>>)>>;
 /// Exact predictions at the linearisation's reference arm of the effect
 /// sets asked for most recently (the polish and the cost of one point
 /// predict the same set), newest last.
@@ -439,17 +416,17 @@ impl ArmModel {
 
     /// Runs `plant` over the log's commanded motion, calling `keep` with
     /// the step and what it senses at every step.
-    fn run(&self, mut plant: Plant, mut keep: impl FnMut(usize, Sensed)) {
+    fn run(&self, mut plant: Plant, mut keep: impl FnMut(usize, Reading)) {
         for (k, set_point) in self.set_points.iter().enumerate() {
             plant.set(*set_point);
-            keep(k, sensed(&plant.measure()));
+            keep(k, reading(&plant.measure()));
             plant.step();
         }
     }
 
     /// The nominal record of arm `l1`, `l2`: what the robot senses at
     /// every step, noise off (cached).
-    fn nominal(&self, l1: f64, l2: f64) -> Result<Arc<Vec<Sensed>>, ModelError> {
+    fn nominal(&self, l1: f64, l2: f64) -> Result<Arc<Vec<Reading>>, ModelError> {
         let params = Self::parameters(l1, l2);
         let key = (
             params.arm.upper_arm_length.to_bits(),
@@ -492,7 +469,7 @@ impl ArmModel {
             .collect()
     }
 
-    fn series(&self, rows: impl Iterator<Item = Sensed>) -> Result<Series, ModelError> {
+    fn series(&self, rows: impl Iterator<Item = Reading>) -> Result<Series, ModelError> {
         let mut out = Series::with_capacity(self.columns.len(), self.steps.len());
         let mut row = vec![0.0; self.columns.len()];
         for all in rows {
@@ -505,33 +482,8 @@ impl ArmModel {
     }
 
     /// Measurement-side effects applied to the nominal record of an arm.
-    fn measured(&self, nominal: &[Sensed], effects: &Effects) -> Result<Series, ModelError> {
-        let delay = effects.latency.map_or(0, |l| l.steps());
-        let mut follower = 0.0;
-        let rows = self.steps.iter().map(|&step| {
-            let mut s = nominal
-                .get(step.saturating_sub(delay))
-                .copied()
-                .unwrap_or([f64::NAN; 7]);
-            let mut pose = [s[0], s[1], s[2]];
-            if let Some(compliance) = effects.grasp_compliance {
-                pose = compliance.end_effector(pose, [s[4], s[5], s[6]]);
-            }
-            if let Some(tilt) = effects.plane_tilt {
-                let (sin, cos) = tilt.angle.sin_cos();
-                s[3] = pose[1] * sin;
-                pose[1] *= cos;
-            }
-            if let Some(backlash) = effects.backlash {
-                follower = backlash.follow(follower, pose[2]);
-                pose[2] = follower;
-            }
-            if let Some(q) = effects.quantization {
-                pose = expected_rounding(&q, pose);
-            }
-            [pose[0], pose[1], pose[2], s[3], s[4], s[5], s[6]]
-        });
-        self.series(rows)
+    fn measured(&self, nominal: &[Reading], effects: &Effects) -> Result<Series, ModelError> {
+        self.series(measurement::measured(nominal, &self.steps, effects))
     }
 
     /// The plant of arm `l1`, `l2` re-run with `effects`, noise off.
@@ -548,36 +500,6 @@ impl ArmModel {
         });
         self.series(rows.into_iter())
     }
-}
-
-/// E[round((v + n) / step) · step] for n ~ N(0, σ²), per pose channel
-/// (σ of `plant.md`). For a step under 1.5 σ the expectation differs
-/// from v by less than 1e-4 σ (the bias's Fourier series decays as
-/// exp(−2π²σ²/step²)), so such a step is not modelled.
-fn expected_rounding(q: &Quantization, pose: [f64; 3]) -> [f64; 3] {
-    let one = |value: f64, step: f64, sigma: f64| -> f64 {
-        if step <= 1.5 * sigma {
-            return value;
-        }
-        let centre = (value / step).round();
-        // Steps farther than 6σ from the value have no probability left:
-        // at most 11 terms (step > 1.5 σ bounds the count).
-        let reach = (6.0 * sigma / step).ceil() as i64 + 1;
-        let cdf = |x: f64| 0.5 * (1.0 + libm::erf(x / (sigma * std::f64::consts::SQRT_2)));
-        let mut mean = 0.0;
-        for k in -reach..=reach {
-            let level = centre + k as f64;
-            let lo = (level - 0.5) * step - value;
-            let hi = (level + 0.5) * step - value;
-            mean += level * step * (cdf(hi) - cdf(lo));
-        }
-        mean
-    };
-    [
-        one(pose[0], q.pos, POSITION_NOISE),
-        one(pose[1], q.pos, POSITION_NOISE),
-        one(pose[2], q.ang, ANGLE_NOISE),
-    ]
 }
 
 impl Model for ArmModel {
