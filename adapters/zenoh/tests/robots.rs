@@ -34,6 +34,18 @@ const TARGET: JointAngles = JointAngles {
 /// Longest a whole estimation may take here [s of wall time].
 const SESSION: Duration = Duration::from_secs(240);
 
+/// The three sessions run one at a time. Run side by side, the AREBO
+/// session sometimes stayed in Estimate until its 240 s limit (1 of 3 runs
+/// of this file on a quiet machine, and once in CI) while each test alone
+/// passed every time; the cause is not found yet (issue note of stop 24).
+static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+fn one_at_a_time() -> std::sync::MutexGuard<'static, ()> {
+    ONE_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
 /// Sends `command` until the kernel accepts it (a request waits in the
 /// node's queue while the robot does not follow; a finish is refused while
 /// the arm still moves); the state it led to. A refused command is sent
@@ -119,6 +131,7 @@ fn node_side() -> (String, limb_zenoh::zenoh::Config, LinkSettings) {
 /// station's script wedged).
 #[test]
 fn a_zenoh_supervisor_runs_a_whole_kuka_session() {
+    let _serial = one_at_a_time();
     let (endpoint, config, settings) = node_side();
     let (link, supervision) = Link::open(config, &settings, KernelConfig::default()).unwrap();
     let view = supervision.view();
@@ -173,6 +186,7 @@ fn a_zenoh_supervisor_runs_a_whole_kuka_session() {
 /// the device's clock), supervised over Zenoh like the KUKA arm.
 #[test]
 fn a_zenoh_supervisor_runs_a_whole_arebo_session() {
+    let _serial = one_at_a_time();
     let (endpoint, config, settings) = node_side();
     let (device, robot) = on_simulated_held_arm(40_000).unwrap();
     let node = Node::spawn(
@@ -197,6 +211,7 @@ fn a_zenoh_supervisor_runs_a_whole_arebo_session() {
 
 #[test]
 fn a_zenoh_supervisor_runs_a_whole_reference_plant_session() {
+    let _serial = one_at_a_time();
     let (endpoint, config, settings) = node_side();
     let plant = Plant::new(PlantParameters::new(0.30, 0.20)).unwrap();
     let period = Duration::from_millis(1);
