@@ -24,7 +24,11 @@
 //! effect. **Forward selection** adds the candidate with the largest Δ,
 //! refits all parameters of the grown set jointly, and repeats while the
 //! best Δ is positive, up to a maximum number of effects. The answer is
-//! `none` when no candidate has Δ > 0 at the first step.
+//! `none` when no candidate has Δ > 0 at the first step. Each step's
+//! candidates start from the hints of the residual the chosen set
+//! leaves ([`Hints`]); a model may ask more of an addition than Δ > 0
+//! ([`Options::min_gain`], [`Options::min_share`], the latter judged
+//! over a pair of additions when the first falls short of it alone).
 
 use crate::holdout::{HoldOut, TooShort};
 use crate::locate::{locate, Location};
@@ -34,7 +38,7 @@ use crate::residual::{gap, scaled, signal_sums, sum_of_squares};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 
 /// One side of a problem: a model with its data and the samples used.
 pub struct Part<'a> {
@@ -105,8 +109,12 @@ pub struct Options {
     pub min_gain: f64,
     /// Least share of the current held-out gap an addition must remove:
     /// an effect outside the candidates leaves a large gap that each
-    /// candidate trims by a few per cent, and none may claim it. 0 (the
-    /// default): only the criterion decides.
+    /// candidate trims by a few per cent, and none may claim it. Two
+    /// effects of like size each remove less on their own, so an addition
+    /// short of the share is kept on trial: it stays only when the next
+    /// addition brings the two together to the share of the gap before
+    /// the trial (see [`select`]). 0 (the default): only the criterion
+    /// decides.
     pub min_share: f64,
 }
 
@@ -377,6 +385,27 @@ fn held_sums(problem: &Problem, effects: &[Applied]) -> Result<Vec<(f64, usize)>
     ))
 }
 
+/// The selection before an addition kept on trial (see
+/// [`Options::min_share`]).
+struct Trial {
+    chosen: Vec<Applied>,
+    /// Held-out sums per signal of `chosen`.
+    current: Vec<(f64, usize)>,
+    /// Index of the step that added it.
+    step: usize,
+    /// Held-out gap of `chosen`.
+    gap: f64,
+}
+
+/// Where the residual of `prediction` lies, and the hints it gives with
+/// the residual attached.
+fn located(model: &dyn Model, prediction: &Series) -> (Location, Hints) {
+    let residual = scaled(model, prediction);
+    let (location, mut hints) = locate(model, &residual);
+    hints.residual = Some(Arc::new(residual));
+    (location, hints)
+}
+
 /// Gauss–Newton iterations that settle a linearised base (see
 /// [`Model::recentre`]) after each selection step.
 const SETTLE_ITERATIONS: usize = 4;
@@ -498,7 +527,7 @@ pub fn select(
         total(&nominal_sums),
         nominal_sums.iter().map(|s| s.1).sum::<usize>(),
     );
-    let (location, hints) = locate(held, &scaled(held, &nominal));
+    let (location, mut hints) = located(held, &nominal);
     let gap_of = |sum: f64| gap(sum / terms.max(1) as f64, floor);
     let before = gap_of(nominal_sum);
     let share = |after: f64| {
@@ -510,6 +539,7 @@ pub fn select(
     };
     let mut current = nominal_sums;
     let mut steps = Vec::new();
+    let mut trial: Option<Trial> = None;
     for _ in 0..options.max_effects.min(candidates.len()) {
         let remaining: Vec<usize> = (0..candidates.len())
             .filter(|c| chosen.iter().all(|a| a.candidate != *c))
@@ -520,6 +550,13 @@ pub fn select(
         let hopeless = !steps.is_empty() && gap_of(total(&current)) < options.min_gain;
         if remaining.is_empty() || hopeless {
             break;
+        }
+        // Later candidates start from what the chosen effects leave (a
+        // slip's change point or a torque's frequency hidden under a
+        // larger first effect shows only once that is taken out).
+        if !steps.is_empty() {
+            let prediction = held.predict(&chosen).map_err(EngineError::Nominal)?;
+            hints = located(held, &prediction).1;
         }
         let done = AtomicUsize::new(0);
         let fits = parallel_map(remaining.len(), options.threads, |i| {
@@ -563,13 +600,28 @@ pub fn select(
             .collect();
         ranked.sort_by(|a, b| b.0.criterion.total_cmp(&a.0.criterion));
         let gap_now = gap_of(total(&current));
-        let winner = ranked
+        // The share counts from the gap before an addition on trial.
+        let share_of = trial.as_ref().map_or(gap_now, |t| t.gap);
+        let best = ranked
             .first()
-            .filter(|(r, _)| {
-                let gain = gap_now - r.held_out_after;
-                r.criterion > 0.0 && gain >= options.min_gain && gain >= options.min_share * gap_now
-            })
-            .map(|(r, f)| (r.effect.clone(), (*f).clone()));
+            .filter(|(r, _)| r.criterion > 0.0 && gap_now - r.held_out_after >= options.min_gain);
+        let winner = match best {
+            Some((r, _)) if share_of - r.held_out_after >= options.min_share * share_of => {
+                trial = None;
+                best
+            }
+            Some(_) if trial.is_none() => {
+                trial = Some(Trial {
+                    chosen: chosen.clone(),
+                    current: current.clone(),
+                    step: steps.len(),
+                    gap: gap_now,
+                });
+                best
+            }
+            _ => None,
+        }
+        .map(|(r, f)| (r.effect.clone(), (*f).clone()));
         steps.push(Step {
             ranking: ranked.iter().map(|(r, _)| r.clone()).collect(),
             added: winner.as_ref().map(|w| w.0.clone()),
@@ -600,6 +652,16 @@ pub fn select(
             current = held_sums(problem, &set).unwrap_or(fitted.held);
             chosen = set;
         }
+    }
+    // An addition still on trial was not confirmed by the next one: the
+    // set goes back to what it was before it (settled there again).
+    if let Some(t) = trial {
+        steps.truncate(t.step + 1);
+        if let Some(step) = steps.last_mut() {
+            step.added = None;
+        }
+        chosen = settle(problem, t.chosen);
+        current = held_sums(problem, &chosen).unwrap_or(t.current);
     }
     let chosen_prediction = if chosen == nominal_effects {
         nominal.clone()

@@ -9,6 +9,7 @@
 //! `plant.md` ([`crate::plant::arm`]) and any other plant.
 
 pub use limb_sim::effects::{Parameter, Scale};
+use std::sync::Arc;
 use thiserror::Error;
 
 /// One measured signal.
@@ -116,8 +117,10 @@ pub enum ModelError {
     Simulation(String),
 }
 
-/// Where the nominal residual points, for choosing where a fit starts.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+/// Where the residual a candidate is to explain points (the residual of
+/// the effects it joins: the nominal sim's in the first selection step),
+/// for choosing where its fit starts.
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Hints {
     /// First time the residual leaves the noise [s], when it does.
     pub onset: Option<f64>,
@@ -128,6 +131,9 @@ pub struct Hints {
     /// The band around that peak holding its power [Hz], when the
     /// residual concentrates in one (the location's `band_hz`).
     pub band: Option<[f64; 2]>,
+    /// That residual itself, scaled ((observed − predicted) / scale, every
+    /// sample); set by the engine.
+    pub residual: Option<Arc<Series>>,
 }
 
 /// What a model compares: its signals and their scales, the measured

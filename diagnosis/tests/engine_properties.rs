@@ -1,10 +1,12 @@
 //! Properties of the engine on a toy plant whose answer is known: a
 //! signal y(t) = sin t observed with unit noise, and three candidate
-//! effects (a constant offset, a gain error, a drift). Whatever is
-//! planted, the engine names it when it stands above the noise, answers
-//! `none` for pure noise, and measures the shrink on held-out blocks.
+//! effects (a constant offset, a gain error, a drift); a fourth plantable
+//! effect, sin 13t, is no candidate (an effect outside the catalogue).
+//! Whatever is planted, the engine names it when it stands above the
+//! noise, answers `none` for pure noise, and measures the shrink on
+//! held-out blocks.
 
-use limb_diagnosis::model::{Applied, Candidate, Data, Parameter, Series, Signal};
+use limb_diagnosis::model::{grid, Applied, Candidate, Data, Hints, Parameter, Series, Signal};
 use limb_diagnosis::{select, HoldOut, Model, ModelError, Options, Problem};
 use limb_sim::noise::Gaussian;
 use proptest::prelude::*;
@@ -16,13 +18,16 @@ const SIGNAL: Signal = Signal {
 
 struct Toy {
     data: Data,
+    /// RMS of the residual handed to each candidate's start points.
+    hinted: std::sync::Mutex<Vec<f64>>,
 }
 
 fn effect(candidate: usize, value: f64, t: f64) -> f64 {
     match candidate {
         0 => value,
         1 => value * t.sin(),
-        _ => value * t / 10.0,
+        2 => value * t / 10.0,
+        _ => value * (13.0 * t).sin(),
     }
 }
 
@@ -53,6 +58,7 @@ impl Toy {
                 observed,
                 candidates,
             },
+            hinted: std::sync::Mutex::new(Vec::new()),
         }
     }
 }
@@ -78,6 +84,14 @@ impl Model for Toy {
             out.push(&[t.sin() + extra])?;
         }
         Ok(out)
+    }
+    fn starts(&self, _candidate: usize, hints: &Hints) -> Vec<Vec<f64>> {
+        if let Some(r) = &hints.residual {
+            let column = r.column(0);
+            let rms = (column.iter().map(|v| v * v).sum::<f64>() / column.len() as f64).sqrt();
+            self.hinted.lock().unwrap().push(rms);
+        }
+        grid(1, 9)
     }
 }
 
@@ -159,4 +173,69 @@ fn forward_selection_adds_two_planted_effects_in_order_of_size() {
         "{:?}",
         s.effects[1].params
     );
+}
+
+#[test]
+fn later_candidates_start_from_what_the_chosen_effects_leave() {
+    // Offset 3 and drift −1.5: the first step's candidates are handed
+    // the nominal residual (3 − 0.15 t plus noise: RMS sqrt(5.25 + 1) =
+    // 2.5), the second step's what the offset leaves (a ramp of ±0.75
+    // plus noise: RMS sqrt(0.19 + 1) = 1.09).
+    let toy = Toy::new(&[(0, 3.0), (2, -1.5)], 11);
+    let problem = Problem::split(&toy, HoldOut::default()).unwrap();
+    let options = Options {
+        max_effects: 2,
+        ..Options::default()
+    };
+    let s = select(&problem, &options, &|_| {}).unwrap();
+    assert_eq!(s.steps.len(), 2);
+    let hinted = toy.hinted.lock().unwrap().clone();
+    // Three candidates at the first step, two at the second.
+    assert_eq!(hinted.len(), 5, "{hinted:?}");
+    assert!(hinted[..3].iter().all(|r| *r > 2.3), "{hinted:?}");
+    assert!(hinted[3..].iter().all(|r| *r < 1.3), "{hinted:?}");
+}
+
+/// Options that ask an addition for half the gap.
+fn half_the_gap() -> Options {
+    Options {
+        max_effects: 3,
+        min_gain: 0.25,
+        min_share: 0.5,
+        ..Options::default()
+    }
+}
+
+#[test]
+fn two_effects_that_each_fall_short_of_the_share_are_added_together() {
+    // Offset 3 and gain 3: a gap of about sqrt(9 + 4.5) = 3.7; the
+    // offset alone leaves sqrt(4.5) = 2.1 (42 % of the gap: short of
+    // half), the gain alone 3 (18 %); together they leave the noise.
+    let toy = Toy::new(&[(0, 3.0), (1, 3.0)], 5);
+    let problem = Problem::split(&toy, HoldOut::default()).unwrap();
+    let s = select(&problem, &half_the_gap(), &|_| {}).unwrap();
+    let added: Vec<&str> = s.effects.iter().map(|e| e.effect.as_str()).collect();
+    assert_eq!(added, ["offset", "gain"]);
+    let first = s.gap.before - s.effects[0].held_out_after;
+    assert!(first < 0.5 * s.gap.before, "the offset alone: {first}");
+    assert!(s.gap.shrink > 0.9, "{:?}", s.gap);
+}
+
+#[test]
+fn an_addition_on_trial_that_nothing_confirms_is_taken_back() {
+    // Offset 1.5 beside 4 sin 13t, which no candidate is: the best first
+    // candidate trims about a tenth of the gap (the offset: sqrt 10.25 to
+    // sqrt 8), enough to earn its parameter and the least gain, so it is
+    // tried; nothing after it brings the share to half, so the answer
+    // holds no effect and the step that tried it says it added none.
+    let toy = Toy::new(&[(0, 1.5), (3, 4.0)], 5);
+    let problem = Problem::split(&toy, HoldOut::default()).unwrap();
+    let s = select(&problem, &half_the_gap(), &|_| {}).unwrap();
+    assert!(s.effects.is_empty(), "{:?}", s.effects);
+    assert_eq!(s.steps.len(), 1, "{:?}", s.steps);
+    assert_eq!(s.steps[0].added, None);
+    let tried = &s.steps[0].ranking[0];
+    assert!(tried.criterion > 0.0, "{tried:?}");
+    assert!(s.gap.before - tried.held_out_after >= 0.25, "{tried:?}");
+    assert_eq!(s.gap.shrink, 0.0, "{:?}", s.gap);
 }

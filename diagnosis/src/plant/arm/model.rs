@@ -675,7 +675,10 @@ impl Model for ArmModel {
                 if let Some(end) = hints.end {
                     anchors.extend([-0.6, -0.3, 0.0].map(|d| end + d));
                 }
-                let change = self.forearm_change();
+                let change = hints
+                    .residual
+                    .as_deref()
+                    .and_then(|r| self.forearm_change(r));
                 if anchors.is_empty() && change.is_none() {
                     return grid(2, 5);
                 }
@@ -717,24 +720,24 @@ impl Model for ArmModel {
 
 impl ArmModel {
     /// Where the forearm of the log most likely changes, and by how much:
-    /// the residual of the prediction at the reference arm, split at each
-    /// sample into a part before and a part after, each fitted by a
-    /// change of the forearm alone along the length Jacobian (∂P/∂l2, per
-    /// signal over σ); the split that explains the most gives the time
-    /// [s] and the change [m] (after less before). `None` without a
-    /// linearisation or a split with information on both sides. Start
-    /// points only, from the whole log like the engine's hints: the fit
-    /// and its score do not depend on it beyond where the search begins.
-    fn forearm_change(&self) -> Option<(f64, f64)> {
+    /// `residual` (scaled, of the effects the slip would join: the
+    /// engine's hint), split at each sample into a part before and a part
+    /// after, each fitted by a change of the forearm alone along the
+    /// length Jacobian (∂P/∂l2, per signal over σ); the split that
+    /// explains the most gives the time [s] and the change [m] (after
+    /// less before). `None` without a linearisation or a split with
+    /// information on both sides. Start points only, from the whole log
+    /// like the engine's hints: the fit and its score do not depend on it
+    /// beyond where the search begins.
+    fn forearm_change(&self, residual: &Series) -> Option<(f64, f64)> {
         let lin = self.current_linearisation()?;
-        let nominal = self.at_reference(lin.reference, &[]).ok()?;
-        let (observed, scales) = (&self.data.observed, &self.data.scales);
-        let samples = nominal.samples().min(observed.samples());
+        let scales = &self.data.scales;
+        let samples = residual.samples().min(lin.jacobian[1].samples());
         let (mut along, mut information) = (vec![0.0; samples], vec![0.0; samples]);
         for i in 0..samples {
-            let rows = lin.jacobian[1].row(i).iter().zip(nominal.row(i));
-            for ((j, p), (o, sigma)) in rows.zip(observed.row(i).iter().zip(scales)) {
-                let (j, r) = (j / sigma, (o - p) / sigma);
+            let rows = lin.jacobian[1].row(i).iter().zip(residual.row(i));
+            for ((j, r), sigma) in rows.zip(scales) {
+                let j = j / sigma;
                 if j.is_finite() && r.is_finite() {
                     along[i] += j * r;
                     information[i] += j * j;
