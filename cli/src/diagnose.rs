@@ -296,6 +296,7 @@ fn confusion(s: &Summary) -> String {
          median held-out shrink when right {:.1} %\n\
          median relative parameter error when right {:.1} %\n\
          none answered for effects > 2x noise: {} of {}\n\
+         none answered for effects > 2x noise once the arm absorbs what it can: {} of {}\n\
          clean logs accused: {} of {}\n\
          corrected arm within 3 mm: {} of {} single-effect logs\n\
          pairs with both effects named: {} of {}\n",
@@ -305,6 +306,8 @@ fn confusion(s: &Summary) -> String {
         100.0 * s.median_parameter_error,
         s.none_for_large_effects,
         s.large_effects,
+        s.none_for_identifiable_effects,
+        s.identifiable_effects,
         s.clean_accused,
         s.clean,
         s.arm_within_tolerance,

@@ -271,6 +271,20 @@ fn the_blind_self_check_is_seeded_and_reports_its_figures() {
     assert_eq!(total, 3, "three single-effect or clean logs, no pair yet");
     assert_eq!(json["top1_accuracy"], 1.0, "{}", json["cases"]);
     assert_eq!(json["none_for_large_effects"], 0);
+    assert_eq!(json["none_for_identifiable_effects"], 0);
+    // What the refitted lengths leave of an effect is finite and, summed
+    // over the seven signals, no more than the effect: its largest
+    // per-signal RMS is at most sqrt(7) times the effect's.
+    for case in json["cases"].as_array().unwrap() {
+        let (size, identifiable) = (
+            case["size"].as_f64().unwrap(),
+            case["identifiable_size"].as_f64().unwrap(),
+        );
+        assert!(
+            (0.0..=size * 7f64.sqrt() + 1e-9).contains(&identifiable),
+            "{case}"
+        );
+    }
     let cases = &json["cases"];
     assert_eq!(cases.as_array().unwrap().len(), 3);
     let again: serde_json::Value = serde_json::from_slice(&run().stdout).unwrap();

@@ -150,6 +150,41 @@ struct Linearisation {
     jacobian: [Series; 2],
 }
 
+/// The normal equations of a weighted least-squares change of the two
+/// arm lengths (l1, l2): terms added one residual at a time, then solved.
+#[derive(Debug, Default)]
+pub(super) struct LengthSolve {
+    normal: [[f64; 2]; 2],
+    right: [f64; 2],
+}
+
+impl LengthSolve {
+    /// Adds residual `r` with derivative `j` by (l1, l2), weight 1/`sigma`².
+    pub(super) fn add(&mut self, j: [f64; 2], r: f64, sigma: f64) {
+        let w = 1.0 / (sigma * sigma);
+        for x in 0..2 {
+            self.right[x] += w * j[x] * r;
+            for y in 0..2 {
+                self.normal[x][y] += w * j[x] * j[y];
+            }
+        }
+    }
+
+    /// The change of (l1, l2) [m] that fits the residuals best; `None`
+    /// when the equations are singular or not finite.
+    pub(super) fn solve(&self) -> Option<[f64; 2]> {
+        let (a, b) = (&self.normal, &self.right);
+        let det = a[0][0] * a[1][1] - a[0][1] * a[1][0];
+        if !(det.is_finite() && det.abs() > 0.0) {
+            return None;
+        }
+        Some([
+            (a[1][1] * b[0] - a[0][1] * b[1]) / det,
+            (a[0][0] * b[1] - a[1][0] * b[0]) / det,
+        ])
+    }
+}
+
 /// Name of the effect whose prediction is anchored apart (see
 /// [`ArmModel::anchor`]).
 const GRASP_SLIP: &str = "grasp_slip";
@@ -550,7 +585,7 @@ impl Model for ArmModel {
         let at = self.at_reference(anchor, &effects).ok()?;
         let observed = &self.data.observed;
         let scales = &self.data.scales;
-        let (mut a, mut b) = ([[0.0f64; 2]; 2], [0.0f64; 2]);
+        let mut solve = LengthSolve::default();
         for i in (0..at.samples()).filter(|i| mask.get(*i).copied().unwrap_or(false)) {
             let (j1, j2, p, o) = (
                 lin.jacobian[0].row(i),
@@ -559,25 +594,10 @@ impl Model for ArmModel {
                 observed.row(i),
             );
             for s in 0..scales.len() {
-                let w = 1.0 / (scales[s] * scales[s]);
-                let j = [j1[s], j2[s]];
-                let r = o[s] - p[s];
-                for x in 0..2 {
-                    b[x] += w * j[x] * r;
-                    for y in 0..2 {
-                        a[x][y] += w * j[x] * j[y];
-                    }
-                }
+                solve.add([j1[s], j2[s]], o[s] - p[s], scales[s]);
             }
         }
-        let det = a[0][0] * a[1][1] - a[0][1] * a[1][0];
-        if !(det.is_finite() && det.abs() > 0.0) {
-            return None;
-        }
-        let delta = [
-            (a[1][1] * b[0] - a[0][1] * b[1]) / det,
-            (a[0][0] * b[1] - a[1][0] * b[0]) / det,
-        ];
+        let delta = solve.solve()?;
         let parameters = &self.data.candidates[base].parameters;
         let values: Vec<f64> = [anchor.0, anchor.1]
             .iter()
