@@ -7,7 +7,7 @@
 //! held-out blocks.
 
 use limb_diagnosis::model::{grid, Applied, Candidate, Data, Hints, Parameter, Series, Signal};
-use limb_diagnosis::{select, HoldOut, Model, ModelError, Options, Problem};
+use limb_diagnosis::{select, HoldOut, Model, ModelError, Options, Problem, Selection};
 use limb_sim::noise::Gaussian;
 use proptest::prelude::*;
 
@@ -95,9 +95,14 @@ impl Model for Toy {
     }
 }
 
-fn answer(toy: &Toy) -> (Option<String>, f64) {
+/// The engine's selection on `toy`, alternating 1 s blocks held out.
+fn selection(toy: &Toy, options: &Options) -> Selection {
     let problem = Problem::split(toy, HoldOut::default()).unwrap();
-    let s = select(&problem, &Options::default(), &|_| {}).unwrap();
+    select(&problem, options, &|_| {}).unwrap()
+}
+
+fn answer(toy: &Toy) -> (Option<String>, f64) {
+    let s = selection(toy, &Options::default());
     assert!(s.gap.held_out);
     (s.effects.first().map(|e| e.effect.clone()), s.gap.shrink)
 }
@@ -112,8 +117,7 @@ proptest! {
     fn a_planted_effect_is_named(candidate in 0usize..3, magnitude in 3.5f64..8.0, negative: bool, seed: u64) {
         let value = if negative { -magnitude } else { magnitude };
         let toy = Toy::new(&[(candidate, value)], seed);
-        let problem = Problem::split(&toy, HoldOut::default()).unwrap();
-        let s = select(&problem, &Options::default(), &|_| {}).unwrap();
+        let s = selection(&toy, &Options::default());
         let names = ["offset", "gain", "drift"];
         prop_assert_eq!(s.effects.len(), 1);
         prop_assert_eq!(s.effects[0].effect.as_str(), names[candidate]);
@@ -159,12 +163,11 @@ fn forward_selection_adds_two_planted_effects_in_order_of_size() {
     // Offset 3 and drift −1.5 together: the offset explains more and
     // comes first, the drift second; nothing else earns a place.
     let toy = Toy::new(&[(0, 3.0), (2, -1.5)], 11);
-    let problem = Problem::split(&toy, HoldOut::default()).unwrap();
     let options = Options {
         max_effects: 3,
         ..Options::default()
     };
-    let s = select(&problem, &options, &|_| {}).unwrap();
+    let s = selection(&toy, &options);
     let added: Vec<&str> = s.effects.iter().map(|e| e.effect.as_str()).collect();
     assert_eq!(added, ["offset", "drift"]);
     assert!(s.effects[1].held_out_after < s.effects[0].held_out_after);
@@ -182,12 +185,11 @@ fn later_candidates_start_from_what_the_chosen_effects_leave() {
     // 2.5), the second step's what the offset leaves (a ramp of ±0.75
     // plus noise: RMS sqrt(0.19 + 1) = 1.09).
     let toy = Toy::new(&[(0, 3.0), (2, -1.5)], 11);
-    let problem = Problem::split(&toy, HoldOut::default()).unwrap();
     let options = Options {
         max_effects: 2,
         ..Options::default()
     };
-    let s = select(&problem, &options, &|_| {}).unwrap();
+    let s = selection(&toy, &options);
     assert_eq!(s.steps.len(), 2);
     let hinted = toy.hinted.lock().unwrap().clone();
     // Three candidates at the first step, two at the second.
@@ -212,8 +214,7 @@ fn two_effects_that_each_fall_short_of_the_share_are_added_together() {
     // offset alone leaves sqrt(4.5) = 2.1 (42 % of the gap: short of
     // half), the gain alone 3 (18 %); together they leave the noise.
     let toy = Toy::new(&[(0, 3.0), (1, 3.0)], 5);
-    let problem = Problem::split(&toy, HoldOut::default()).unwrap();
-    let s = select(&problem, &half_the_gap(), &|_| {}).unwrap();
+    let s = selection(&toy, &half_the_gap());
     let added: Vec<&str> = s.effects.iter().map(|e| e.effect.as_str()).collect();
     assert_eq!(added, ["offset", "gain"]);
     let first = s.gap.before - s.effects[0].held_out_after;
@@ -229,8 +230,7 @@ fn an_addition_on_trial_that_nothing_confirms_is_taken_back() {
     // tried; nothing after it brings the share to half, so the answer
     // holds no effect and the step that tried it says it added none.
     let toy = Toy::new(&[(0, 1.5), (3, 4.0)], 5);
-    let problem = Problem::split(&toy, HoldOut::default()).unwrap();
-    let s = select(&problem, &half_the_gap(), &|_| {}).unwrap();
+    let s = selection(&toy, &half_the_gap());
     assert!(s.effects.is_empty(), "{:?}", s.effects);
     assert_eq!(s.steps.len(), 1, "{:?}", s.steps);
     assert_eq!(s.steps[0].added, None);

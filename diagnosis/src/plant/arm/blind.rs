@@ -268,15 +268,18 @@ const LENGTH_ITERATIONS: usize = 4;
 /// less the nominal sim at the lengths that fit it best (weights 1/σ²;
 /// [`LENGTH_ITERATIONS`] Gauss–Newton steps from the true arm, the
 /// derivative by (l1, l2) from central differences of ±[`LENGTH_STEP`]).
-/// NaN when a simulation fails or the fit is singular.
-fn identifiable_size(records: &[Record], arm: (f64, f64), applied: &[Applied]) -> f64 {
+/// `truth` is the sim of the true arm `arm` against `records`. NaN when
+/// a simulation fails or the fit is singular.
+fn identifiable_size(
+    truth: &ArmModel,
+    records: &[Record],
+    arm: (f64, f64),
+    applied: &[Applied],
+) -> f64 {
     let nominal = |(l1, l2): (f64, f64)| {
         ArmModel::new(Lengths::Given(l1, l2), records)
             .ok()
             .and_then(|m| m.predict(&[]).ok())
-    };
-    let Ok(truth) = ArmModel::new(Lengths::Given(arm.0, arm.1), records) else {
-        return f64::NAN;
     };
     let (Ok(with), scales) = (truth.predict(applied), truth.scales()) else {
         return f64::NAN;
@@ -412,7 +415,7 @@ fn case(drawn: &Drawn) -> Result<Case, DiagnoseError> {
         }
     };
     let size = smallest(&|a| effect_size(&truth_model, a));
-    let identifiable = smallest(&|a| identifiable_size(&records, (l1, l2), a));
+    let identifiable = smallest(&|a| identifiable_size(&truth_model, &records, (l1, l2), a));
     let d = &diagnosed.diagnosis;
     let truth: Vec<String> = classes.iter().map(|c| names[*c].to_string()).collect();
     let parameter_errors = match (truth.as_slice(), d.effects.first(), drawn.params.first()) {

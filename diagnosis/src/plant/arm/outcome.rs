@@ -42,7 +42,9 @@ pub const MOST_EFFECTS: usize = 3;
 /// are worth a few hundredths to a tenth.
 pub const MIN_GAIN: f64 = 0.25;
 /// Least share of the current held-out gap an added effect must remove
-/// (an effect outside the catalogue: the best candidate trims 4 %).
+/// (an effect outside the catalogue: the best candidate trims 4 %); one
+/// short of it alone stays only when the next addition brings the two to
+/// it (two effects of like size: see `Options::min_share`).
 pub const MIN_SHARE: f64 = 0.2;
 /// The answer when no effect is added but a gap beyond the noise remains:
 /// neither `none` nor a catalogue effect.
