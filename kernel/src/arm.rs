@@ -257,6 +257,25 @@ mod tests {
         assert!(q.is_finite() && residual < 0.31, "{q:?} {residual}");
     }
 
+    /// The inner edge of the reach is reachable: a grasp exactly |l1 − l2|
+    /// from the shoulder is the fully folded elbow (q2 = π), not out of
+    /// reach (lengths and distance exact in binary).
+    #[test]
+    fn a_grasp_at_the_inner_edge_of_the_reach_is_the_folded_elbow() {
+        let arm = arm(0.5, 0.25);
+        let q = arm
+            .inverse_from_point(Point::new(0.5, 0.0), ElbowBranch::Flexed)
+            .unwrap();
+        assert!(
+            (q.elbow_flexion - core::f64::consts::PI).abs() < 1e-12,
+            "{q:?}"
+        );
+        assert_eq!(
+            arm.inverse_from_point(Point::new(0.500_000_001, 0.0), ElbowBranch::Flexed),
+            Err(KinematicsError::OutOfReach)
+        );
+    }
+
     #[test]
     fn joint_angles_are_finite_only_when_both_are() {
         let q = |shoulder_elevation, elbow_flexion| JointAngles {
@@ -280,12 +299,20 @@ mod tests {
             prop_assert!((back.elbow_flexion - q2).abs() < 1e-9);
         }
 
+        /// Both branches: a flexed elbow (q2 > 0) and a hyperextended one
+        /// (q2 < 0) come back from the grasp point alone, given the branch.
         #[test]
         fn point_inverse_round_trips_on_its_branch(l1 in 0.2..0.4f64, l2 in 0.15..0.3f64,
-                                                    q1 in 0.0..1.5f64, q2 in 0.05..2.5f64) {
+                                                    q1 in 0.0..1.5f64, flexion in 0.05..2.5f64,
+                                                    hyperextended in any::<bool>()) {
             let arm = arm(l1, l2);
+            let (q2, branch) = if hyperextended {
+                (-flexion, ElbowBranch::Hyperextended)
+            } else {
+                (flexion, ElbowBranch::Flexed)
+            };
             let q = JointAngles { shoulder_elevation: q1, elbow_flexion: q2 };
-            let back = arm.inverse_from_point(arm.forward(q).point(), ElbowBranch::Flexed).unwrap();
+            let back = arm.inverse_from_point(arm.forward(q).point(), branch).unwrap();
             prop_assert!((back.shoulder_elevation - q1).abs() < 1e-6);
             prop_assert!((back.elbow_flexion - q2).abs() < 1e-6);
         }

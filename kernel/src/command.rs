@@ -163,6 +163,26 @@ mod tests {
             ),
             (
                 Command {
+                    set_point: Some(SetPoint {
+                        velocity: PoseRate::new(0.0, f64::NAN, 0.0),
+                        ..SetPoint::hold(Pose::default())
+                    }),
+                    ..hold()
+                },
+                "command is not finite",
+            ),
+            (
+                Command {
+                    set_point: Some(SetPoint {
+                        acceleration: PoseRate::new(0.0, 0.0, f64::INFINITY),
+                        ..SetPoint::hold(Pose::default())
+                    }),
+                    ..hold()
+                },
+                "command is not finite",
+            ),
+            (
+                Command {
                     wrench: Wrench::new(0.0, 46.0, 0.0),
                     ..hold()
                 },
@@ -171,6 +191,14 @@ mod tests {
             (
                 Command {
                     wrench: Wrench::new(40.0, 40.0, 0.0),
+                    ..hold()
+                },
+                "commanded force exceeds the force limit",
+            ),
+            // 45.25 N: each component within 45 N, the magnitude 0.25 N over.
+            (
+                Command {
+                    wrench: Wrench::new(32.0, 32.0, 0.0),
                     ..hold()
                 },
                 "commanded force exceeds the force limit",

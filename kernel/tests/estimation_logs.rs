@@ -7,7 +7,7 @@ mod support {
 
 use limb_kernel::estimation::online::OnlineEstimator;
 use limb_kernel::estimation::refine::{Progress, ITERATIONS, SAMPLES_PER_STEP};
-use limb_kernel::estimation::{estimate_arm, Method};
+use limb_kernel::estimation::{estimate_arm, EstimateError, Method};
 use limb_kernel::estimation::{estimate_online, ArmEstimate};
 use limb_kernel::path::PATH_CAPACITY;
 use limb_kernel::validate::{validate, ValidationLimits};
@@ -205,4 +205,27 @@ fn req_time_002_the_refinement_runs_in_bounded_slices() {
     );
     assert!(whole_calls <= 2 * ITERATIONS + 4, "{whole_calls}");
     assert_eq!(sliced, whole);
+}
+
+/// One non-finite number anywhere in a sample (its time, pose or wrench)
+/// refuses the whole path as `NonFiniteSample`, for every method, where
+/// the same path with that sample intact is estimated.
+#[test]
+fn one_non_finite_number_in_a_good_path_is_refused_by_name() {
+    let log = logs::read("noisy/case1.csv");
+    let at = log.path.len() / 2;
+    let mut spoiled = [log.path.clone(), log.path.clone(), log.path.clone()];
+    spoiled[0][at].time = f64::NAN;
+    spoiled[1][at].pose.z = f64::INFINITY;
+    spoiled[2][at].wrench.fz = f64::NAN;
+    for method in [Method::Hough, Method::Ls, Method::Auto, Method::Online] {
+        assert!(estimate_arm(&log.path, method).is_ok(), "{method:?}");
+        for path in &spoiled {
+            assert_eq!(
+                estimate_arm(path, method).err(),
+                Some(EstimateError::NonFiniteSample),
+                "{method:?}"
+            );
+        }
+    }
 }
