@@ -276,6 +276,24 @@ mod tests {
         );
     }
 
+    /// The singular threshold scales with the arm (ε · (l1 + l2), 1.1e-16 m
+    /// here): an arm of equal lengths folded to a grasp 2.2e-16 m from its
+    /// shoulder is still solved, fully flexed.
+    #[test]
+    fn a_grasp_beyond_the_rounding_of_the_shoulder_is_solved() {
+        let arm = arm(0.25, 0.25);
+        let grasp = Point::new(0.5 - f64::EPSILON, 0.0);
+        let q = arm.inverse_from_point(grasp, ElbowBranch::Flexed).unwrap();
+        assert!(
+            (q.elbow_flexion - core::f64::consts::PI).abs() < 1e-6,
+            "{q:?}"
+        );
+        assert_eq!(
+            arm.inverse_from_point(Point::new(0.5, 0.0), ElbowBranch::Flexed),
+            Err(KinematicsError::AtShoulder)
+        );
+    }
+
     #[test]
     fn joint_angles_are_finite_only_when_both_are() {
         let q = |shoulder_elevation, elbow_flexion| JointAngles {

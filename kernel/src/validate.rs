@@ -500,6 +500,20 @@ mod verification {
                 };
                 assert_eq!(validate(&changed, start, &l), Err(rejection));
             }
+            // The geometry's consistency: an elbow (and shoulder) off the
+            // table by exactly the largest mismatch is accepted, one just
+            // beyond is not (the forearm's mismatch it adds is second order,
+            // m² / 2l).
+            let mut raised = e;
+            raised.elbow.z = l.max_geometry_mismatch;
+            raised.shoulder.z = l.max_geometry_mismatch;
+            assert_eq!(validate(&raised, start, &l).err(), None);
+            raised.elbow.z = l.max_geometry_mismatch * (1.0 + 1e-9);
+            raised.shoulder.z = raised.elbow.z;
+            assert_eq!(
+                validate(&raised, start, &l),
+                Err(Rejection::GeometryInconsistent(raised.elbow.z))
+            );
         }
 
         #[test]

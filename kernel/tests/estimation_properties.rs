@@ -250,3 +250,60 @@ fn a_circle_beyond_the_largest_radius_is_degenerate() {
         assert_eq!(fit, Err(CircleFitError::Degenerate), "{name}");
     }
 }
+
+/// The largest radius is MAX_RADIUS (1 km), compared as r² ≤ (1 km)²: a
+/// 100 m circle (a quarter of it sampled) is still fitted, by both
+/// algebraic fits.
+#[test]
+fn a_circle_inside_the_largest_radius_is_fitted() {
+    let radius = 100.0;
+    let centre = Point::new(3.0, -radius);
+    let points: Vec<Point> = arc(centre, radius, 0.0, core::f64::consts::FRAC_PI_2, 50)
+        .into_iter()
+        .map(|(p, _)| p)
+        .collect();
+    for (name, fit) in [
+        ("kasa", fit_circle_kasa(points.iter().copied())),
+        ("taubin", fit_circle_taubin(points.iter().copied())),
+    ] {
+        let circle = fit.unwrap_or_else(|e| panic!("{name}: {e:?}"));
+        assert!(close(circle, centre, radius, 1e-6), "{name}: {circle:?}");
+    }
+}
+
+/// Finite points whose squared spreads multiply past f64's range (a
+/// 1e60 m circle) are a degenerate geometry, not non-finite data.
+#[test]
+fn finite_points_far_apart_are_degenerate_not_non_finite() {
+    let radius = 1.0e60;
+    let points: Vec<Point> = arc(Point::new(0.0, 0.0), radius, 0.0, 1.0, 50)
+        .into_iter()
+        .map(|(p, _)| p)
+        .collect();
+    for (name, fit) in [
+        ("kasa", fit_circle_kasa(points.iter().copied())),
+        ("taubin", fit_circle_taubin(points.iter().copied())),
+    ] {
+        assert_eq!(fit, Err(CircleFitError::Degenerate), "{name}");
+    }
+}
+
+/// A circle is valid only with a finite centre and a finite, positive
+/// radius.
+#[test]
+fn a_circle_is_valid_only_when_finite_with_a_positive_radius() {
+    let circle = |x: f64, radius: f64| Circle {
+        centre: Point::new(x, 0.0),
+        radius,
+    };
+    assert!(circle(0.1, 0.3).is_valid());
+    for (x, radius) in [
+        (f64::NAN, 0.3),
+        (0.1, f64::INFINITY),
+        (0.1, f64::NAN),
+        (0.1, 0.0),
+        (0.1, -0.3),
+    ] {
+        assert!(!circle(x, radius).is_valid(), "{x} {radius}");
+    }
+}

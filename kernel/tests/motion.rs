@@ -127,3 +127,68 @@ fn a_zero_hold_is_a_valid_configuration_and_a_negative_one_is_not() {
         ))
     );
 }
+
+/// A bounded move lasts the longest of its three needs: the grasp-point
+/// speed, the forearm rate (T = 1.875 |Δψ| / ω_max, the closed form's
+/// peak rate) and the floor; a non-finite rate or floor is refused.
+#[test]
+fn a_bounded_move_lasts_the_longest_of_its_needs() {
+    use limb_kernel::motion::PlanError;
+    let start = Pose::new(0.1, 0.2, 0.3);
+    // A pure turn of 1 rad at 0.5 rad/s: 3.75 s, longer than the 1 s floor.
+    let turn = MinimumJerkMove::bounded(start, Pose::new(0.1, 0.2, 1.3), 0.05, 0.5, 1.0).unwrap();
+    assert!(
+        close(turn.duration(), 1.875 * 1.0 / 0.5),
+        "{}",
+        turn.duration()
+    );
+    // 0.1 m at 0.05 m/s: 3.75 s; the small turn and the floor need less.
+    let reach = MinimumJerkMove::bounded(start, Pose::new(0.2, 0.2, 0.31), 0.05, 0.5, 1.0).unwrap();
+    assert!(
+        close(reach.duration(), 1.875 * 0.1 / 0.05),
+        "{}",
+        reach.duration()
+    );
+    // A short move: the floor.
+    let short =
+        MinimumJerkMove::bounded(start, Pose::new(0.101, 0.2, 0.3), 0.05, 0.5, 1.0).unwrap();
+    assert!(close(short.duration(), 1.0), "{}", short.duration());
+    for (rate, floor) in [
+        (f64::NAN, 1.0),
+        (f64::INFINITY, 1.0),
+        (0.5, f64::NAN),
+        (0.5, f64::INFINITY),
+    ] {
+        assert_eq!(
+            MinimumJerkMove::bounded(start, Pose::new(0.2, 0.2, 0.3), 0.05, rate, floor).err(),
+            Some(PlanError::NonFinite),
+            "rate {rate}, floor {floor}"
+        );
+    }
+}
+
+/// A sample is due one recording period after the last (to within 1 ppm of
+/// it, so rounded 100 Hz time stamps keep every row), never sooner.
+#[test]
+fn a_path_sample_is_due_one_period_after_the_last() {
+    use limb_kernel::geometry::Wrench;
+    use limb_kernel::path::{is_due, PATH_SAMPLE_PERIOD};
+    use limb_kernel::PathSample;
+    let last = PathSample {
+        time: 12.0,
+        pose: Pose::default(),
+        wrench: Wrench::ZERO,
+    };
+    assert!(is_due(None, 0.0));
+    assert!(is_due(Some(&last), 12.0 + PATH_SAMPLE_PERIOD));
+    assert!(is_due(
+        Some(&last),
+        12.0 + PATH_SAMPLE_PERIOD * (1.0 - 5e-7)
+    ));
+    assert!(!is_due(
+        Some(&last),
+        12.0 + PATH_SAMPLE_PERIOD * (1.0 - 2e-6)
+    ));
+    assert!(!is_due(Some(&last), 12.0 + 0.5 * PATH_SAMPLE_PERIOD));
+    assert!(!is_due(Some(&last), 12.0));
+}

@@ -1,0 +1,70 @@
+//! How `Kernel::step` and `Kernel::request` treat what they are given
+//! besides the state machine: a frame that repeats the last time stamp,
+//! and a trace nobody drains.
+
+use limb_kernel::geometry::{Pose, Wrench};
+use limb_kernel::trace::TRACE_CAPACITY;
+use limb_kernel::{Kernel, KernelConfig, PathSample, Request, StateKind};
+
+const PERIOD: f64 = 0.001;
+
+fn frame(time: f64, fz: f64) -> PathSample {
+    PathSample {
+        time,
+        pose: Pose::default(),
+        wrench: Wrench::new(0.0, fz, 0.0),
+    }
+}
+
+/// A frame that repeats the last time stamp is judged by the absolute
+/// monitors but does not enter the rate window (its span from the last
+/// frame is zero): a 20 N re-stamped reading, 400 N/s over the 50 ms
+/// window were it counted, does not trip the 250 N/s force-rate monitor;
+/// the same reading under a new time stamp does.
+#[test]
+fn a_repeated_time_stamp_does_not_enter_the_rate_window() {
+    let config = KernelConfig::default();
+    let window = config.limits.rate_window;
+    let steps = (2.0 * window / PERIOD) as usize;
+    let settled = |kernel: &mut Kernel| {
+        for k in 0..=steps {
+            let time = k as f64 * PERIOD;
+            let command = kernel.step(&frame(time, 0.0), time);
+            assert_eq!(command.state, StateKind::Grasp, "step {k}");
+        }
+        steps as f64 * PERIOD
+    };
+    let mut kernel = Kernel::new(config).unwrap();
+    let last = settled(&mut kernel);
+    let repeated = kernel.step(&frame(last, 20.0), last + 0.5 * PERIOD);
+    assert_eq!(repeated.state, StateKind::Grasp);
+    let next = kernel.step(&frame(last + PERIOD, 0.0), last + PERIOD);
+    assert_eq!(next.state, StateKind::Grasp);
+
+    let mut kernel = Kernel::new(config).unwrap();
+    let last = settled(&mut kernel);
+    let new = kernel.step(&frame(last + PERIOD, 20.0), last + PERIOD);
+    assert_eq!(new.state, StateKind::SafeStop);
+}
+
+/// The trace keeps the newest events; those pushed out while nobody
+/// drained it are counted, and a drained trace has lost none.
+#[test]
+fn an_undrained_trace_counts_the_events_it_lost() {
+    let mut kernel = Kernel::new(KernelConfig::default()).unwrap();
+    kernel.step(&frame(0.0, 0.0), 0.0);
+    assert_eq!(kernel.dropped_events(), 0);
+    let refused = TRACE_CAPACITY + 5;
+    for k in 0..refused {
+        // Not allowed in Grasp: refused, and each refusal is an event.
+        assert!(kernel
+            .request(Request::FinishManipulation, k as f64 * PERIOD)
+            .is_err());
+    }
+    assert_eq!(kernel.dropped_events(), 5);
+    let mut kept = 0;
+    while kernel.pop_event().is_some() {
+        kept += 1;
+    }
+    assert_eq!(kept, TRACE_CAPACITY);
+}
