@@ -1,0 +1,121 @@
+//! The shaped lift (`lift.rs`) replayed over the recorded paths of the six
+//! noisy benchmark logs: the measured frames of `plant.md`'s lift feed the
+//! online estimator and the lift in turn (open loop: the lift's set-points
+//! do not move the logged arm), so the lift's own phase logic is checked
+//! against real arcs: where it ends, how it moves to its hold, when it is
+//! settled, and how it runs on when the arc is not reached.
+
+// Shared with `estimation_logs.rs`, which also scores against the truth
+// columns; this file only reads the paths.
+#[allow(dead_code)]
+mod support {
+    pub mod logs;
+}
+
+use limb_kernel::estimation::online::OnlineEstimator;
+use limb_kernel::geometry::Point;
+use limb_kernel::lift::{LiftCommand, LiftPhase, ShapedLift};
+use limb_kernel::motion::{EstimationMotion, SetPoint};
+use limb_kernel::KernelConfig;
+use support::logs;
+
+/// Replays benchmark log `case` through a lift planned from its first
+/// pose; `each` sees every step's time, command and lift.
+fn replay(
+    case: usize,
+    config: &KernelConfig,
+    mut each: impl FnMut(f64, LiftCommand, &ShapedLift, &EstimationMotion),
+) {
+    let log = logs::read(&format!("noisy/case{case}.csv"));
+    let first = log.path[0];
+    let motion = EstimationMotion::new(first.pose, &config.estimation_motion).unwrap();
+    let mut lift = ShapedLift::new(motion, first.time);
+    let mut online = OnlineEstimator::new();
+    for end in 1..=log.path.len() {
+        let frame = log.path[end - 1];
+        online.record(&log.path[..end]);
+        let command = lift
+            .advance(frame.time, &frame, &online, config)
+            .unwrap_or_else(|e| panic!("case {case} at {} s: {e:?}", frame.time));
+        each(frame.time, command, &lift, &motion);
+    }
+}
+
+/// Once the upper-arm arc is reached the lift ends: it moves from its last
+/// set-point to the holding pose along the planned `to_hold` move, then
+/// holds that pose; `ended` and `hold` say so from then on (never before),
+/// and `settled` answers once the move and `settle_time` have passed.
+#[test]
+fn an_ended_lift_moves_to_its_hold_holds_it_and_settles() {
+    let config = KernelConfig::default();
+    let settle_time = config.lift_shaping.settle_time;
+    for case in 1..=6 {
+        let mut ending = None;
+        let (mut moved, mut held, mut settled) = (0, 0, 0);
+        replay(case, &config, |now, command, lift, _| {
+            if ending.is_none() {
+                if let LiftPhase::Settling {
+                    since,
+                    to_hold,
+                    hold,
+                    reason,
+                } = *lift.phase()
+                {
+                    ending = Some((since, to_hold, hold, reason));
+                }
+            }
+            let Some((since, to_hold, hold, reason)) = ending else {
+                assert_eq!(lift.ended(), None, "case {case} at {now} s");
+                assert_eq!(lift.hold(), None, "case {case} at {now} s");
+                assert_eq!(lift.settled(now, settle_time), None);
+                return;
+            };
+            assert_eq!(lift.ended(), Some(reason), "case {case}");
+            assert_eq!(lift.hold(), Some(hold), "case {case}");
+            if now - since < to_hold.duration() {
+                assert_eq!(command, LiftCommand::Move(to_hold.at(now - since)));
+                moved += 1;
+            } else {
+                assert_eq!(command, LiftCommand::Hold(SetPoint::hold(hold)));
+                held += 1;
+            }
+            let done = now - since >= to_hold.duration() + settle_time;
+            assert_eq!(
+                lift.settled(now, settle_time),
+                done.then_some((hold, reason)),
+                "case {case} at {now} s"
+            );
+            settled += usize::from(done);
+        });
+        assert!(ending.is_some(), "case {case}: the lift never ended");
+        assert!(
+            moved > 10 && held > 10 && settled > 10,
+            "case {case}: {moved} moving, {held} holding, {settled} settled steps"
+        );
+    }
+}
+
+/// Where the upper-arm arc is not reached (a target arc beyond any lift),
+/// the planned lift runs to its goal and on by `extension` along the same
+/// line: every set-point it commands lies on the line through the lift's
+/// start and goal, and some lie beyond the goal.
+#[test]
+fn a_lift_short_of_its_arc_runs_on_along_its_line() {
+    let mut config = KernelConfig::default();
+    config.lift_shaping.target_arc = 3.0;
+    let mut beyond = 0;
+    replay(1, &config, |now, command, lift, motion| {
+        let (start, goal) = (motion.lift().start().point(), motion.lift().goal().point());
+        if let (LiftCommand::Move(s), LiftPhase::Lifting) = (command, lift.phase()) {
+            let p: Point = s.pose.point();
+            let (ux, uz) = (goal.x - start.x, goal.z - start.z);
+            let off_line = ((p.x - start.x) * uz - (p.z - start.z) * ux).abs() / ux.hypot(uz);
+            assert!(
+                off_line < 1e-9,
+                "at {now} s: {off_line} m off the lift's line"
+            );
+            beyond += usize::from(p.distance(start) > goal.distance(start) + 1e-3);
+        }
+    });
+    assert!(beyond > 10, "{beyond} set-points beyond the goal");
+}
