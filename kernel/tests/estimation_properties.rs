@@ -307,3 +307,76 @@ fn a_circle_is_valid_only_when_finite_with_a_positive_radius() {
         assert!(!circle(x, radius).is_valid(), "{x} {radius}");
     }
 }
+
+/// Taubin's fit checked against its definition, solved another way: with
+/// the points centred, the circle A(w − w̄) + Bx + Cz = 0 (w = x² + z²)
+/// minimises the mean algebraic distance vᵀSv (S: the covariance of
+/// (w, x, z)) under Taubin's gradient constraint vᵀNv = 1, N = diag(4w̄, 1,
+/// 1): the generalised eigenvector of the smallest eigenvalue, here from
+/// nalgebra's symmetric eigen-decomposition of N^-½ S N^-½. The fit's
+/// characteristic polynomial and Newton iteration must give the same
+/// circle, on arcs noisy enough (±20 mm) that the root is far from 0.
+#[test]
+fn taubin_is_the_generalised_eigenvector_of_its_constraint() {
+    let mut state = 0x2545_F491_4F6C_DD1Du64;
+    let mut noise = move || {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 0.04
+    };
+    for (span, n) in [(0.7, 300), (1.5, 200), (2.5, 100), (4.0, 60)] {
+        let points: Vec<Point> = arc(Point::new(0.12, -0.05), 0.3, 0.2, span, n)
+            .into_iter()
+            .map(|(p, _)| Point::new(p.x + noise(), p.z + noise()))
+            .collect();
+        let count = points.len() as f64;
+        let mean = |f: &dyn Fn(&Point) -> f64| points.iter().map(f).sum::<f64>() / count;
+        let (mx, mz) = (mean(&|p| p.x), mean(&|p| p.z));
+        let centred: Vec<(f64, f64, f64)> = points
+            .iter()
+            .map(|p| {
+                let (x, z) = (p.x - mx, p.z - mz);
+                (x, z, x * x + z * z)
+            })
+            .collect();
+        let m = |f: &dyn Fn(&(f64, f64, f64)) -> f64| centred.iter().map(f).sum::<f64>() / count;
+        let w_mean = m(&|c| c.2);
+        let s = nalgebra::Matrix3::new(
+            m(&|c| (c.2 - w_mean) * (c.2 - w_mean)),
+            m(&|c| (c.2 - w_mean) * c.0),
+            m(&|c| (c.2 - w_mean) * c.1),
+            m(&|c| (c.2 - w_mean) * c.0),
+            m(&|c| c.0 * c.0),
+            m(&|c| c.0 * c.1),
+            m(&|c| (c.2 - w_mean) * c.1),
+            m(&|c| c.0 * c.1),
+            m(&|c| c.1 * c.1),
+        );
+        let scale = nalgebra::Matrix3::from_diagonal(&nalgebra::Vector3::new(
+            1.0 / (4.0 * w_mean).sqrt(),
+            1.0,
+            1.0,
+        ));
+        let eigen = (scale * s * scale).symmetric_eigen();
+        let smallest = eigen.eigenvalues.imin();
+        let v = scale * eigen.eigenvectors.column(smallest);
+        let (a, b, c) = (v[0], v[1], v[2]);
+        let expected = Circle {
+            centre: Point::new(mx - b / (2.0 * a), mz - c / (2.0 * a)),
+            radius: ((b * b + c * c) / (4.0 * a * a) + w_mean).sqrt(),
+        };
+        let taubin = fit_circle_taubin(points.iter().copied()).unwrap();
+        assert!(
+            close(taubin, expected.centre, expected.radius, 1e-9),
+            "span {span}: {taubin:?} vs {expected:?}"
+        );
+        // The noise moves the fit well off the noise-free circle, so the
+        // root is far from Kåsa's (at 0).
+        let kasa = fit_circle_kasa(points.iter().copied()).unwrap();
+        assert!(
+            !close(kasa, expected.centre, expected.radius, 1e-4),
+            "span {span}: Kåsa {kasa:?} is Taubin's {expected:?}"
+        );
+    }
+}
