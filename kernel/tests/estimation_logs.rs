@@ -5,10 +5,13 @@ mod support {
     pub mod logs;
 }
 
-use limb_kernel::estimation::online::OnlineEstimator;
+use limb_kernel::estimation::online::{elbow_point, OnlineEstimator, OnlinePhase};
 use limb_kernel::estimation::refine::{Progress, ITERATIONS, SAMPLES_PER_STEP};
 use limb_kernel::estimation::{estimate_arm, EstimateError, Method};
 use limb_kernel::estimation::{estimate_online, ArmEstimate};
+use limb_kernel::estimation::{DEPARTURE_WINDOW, LIFT_PSI};
+use limb_kernel::geometry::Pose;
+use limb_kernel::path::PathSample;
 use limb_kernel::path::PATH_CAPACITY;
 use limb_kernel::validate::{validate, ValidationLimits};
 use support::logs;
@@ -227,5 +230,111 @@ fn one_non_finite_number_in_a_good_path_is_refused_by_name() {
                 "{method:?}"
             );
         }
+    }
+}
+
+/// The online estimator replayed over each log one sample at a time, as
+/// the kernel records it; `each` sees the estimator after every sample.
+fn replay_online(path: &[PathSample], mut each: impl FnMut(usize, &OnlineEstimator)) {
+    let mut online = OnlineEstimator::new();
+    for end in 1..=path.len() {
+        online.record(&path[..end]);
+        each(end - 1, &online);
+    }
+}
+
+/// The online estimator's split and forearm arc by their definitions: lift
+/// -off is the first sample whose ψ exceeds `LIFT_PSI`; the forearm phase
+/// ends `DEPARTURE_WINDOW` samples before the sample that decides the
+/// departure (the window's first); the forearm's arc is the largest ψ of
+/// the phase above ψ at lift-off. A sample with a non-finite pose is not
+/// recorded at all.
+#[test]
+fn the_online_split_and_forearm_arc_follow_their_definitions() {
+    for case in 1..=6 {
+        let log = logs::read(&format!("noisy/case{case}.csv"));
+        let psi = |i: usize| log.path[i].pose.psi;
+        let (mut lift, mut departed) = (None, None);
+        let mut previous = OnlineEstimator::new();
+        replay_online(&log.path, |index, online| {
+            if previous.phase() == OnlinePhase::Resting && online.phase() == OnlinePhase::Forearm {
+                lift = Some(index);
+            }
+            if previous.phase() == OnlinePhase::Forearm && online.phase() == OnlinePhase::UpperArm {
+                departed = Some(index);
+            }
+            if index == 1000 {
+                let mut spoiled = log.path[..=index].to_vec();
+                spoiled[index].pose.x = f64::NAN;
+                let mut skipped = previous;
+                skipped.record(&spoiled);
+                assert_eq!(skipped, previous, "case {case}: a NaN pose was recorded");
+            }
+            previous = *online;
+        });
+        let (lift, departed) = (lift.expect("lift-off"), departed.expect("departure"));
+        assert!(psi(lift) > LIFT_PSI && (0..lift).all(|i| psi(i) <= LIFT_PSI));
+        let online = previous;
+        assert_eq!(online.split(), (lift, departed + 1 - DEPARTURE_WINDOW));
+        let highest = (lift..=departed).map(psi).fold(f64::MIN, f64::max);
+        assert_eq!(online.arcs().0, highest - psi(lift), "case {case}");
+    }
+}
+
+/// The joint envelope is a property of the arm, not of where frame S's
+/// origin lies: the same log moved by (0.2, −0.15) m gives the same worst
+/// -case joint angles at every sample; before a provisional forearm there
+/// is none; once the provisional upper arm is in use it is the elevation
+/// about its shoulder plus three standard deviations of the shoulder's
+/// position and the forearm's radius over the reach.
+#[test]
+fn the_joint_envelope_is_translation_invariant_and_widened_by_its_uncertainty() {
+    let prior = ValidationLimits::default();
+    for case in 1..=6 {
+        let log = logs::read(&format!("noisy/case{case}.csv"));
+        let moved: Vec<PathSample> = log
+            .path
+            .iter()
+            .map(|s| PathSample {
+                pose: Pose::new(s.pose.x + 0.2, s.pose.z - 0.15, s.pose.psi),
+                ..*s
+            })
+            .collect();
+        let mut envelopes = Vec::new();
+        let mut widened = 0;
+        replay_online(&log.path, |index, online| {
+            let pose = log.path[index].pose;
+            let envelope = online.joint_envelope(pose, &prior);
+            assert_eq!(envelope.is_some(), online.forearm().is_some());
+            if let (Some(e), Some(forearm), Some(upper)) =
+                (envelope, online.forearm(), online.upper_arm())
+            {
+                let elbow = elbow_point(pose, forearm.circle.radius);
+                let shoulder = upper.circle.centre;
+                let nominal = (elbow.z - shoulder.z).atan2(shoulder.x - elbow.x);
+                let spread = 3.0 * (upper.centre_sd + forearm.radius_sd) / elbow.distance(shoulder);
+                assert!((e.max_shoulder_elevation - (nominal + spread)).abs() < 1e-9);
+                assert!(
+                    (e.min_elbow_flexion - (pose.psi - e.max_shoulder_elevation)).abs() < 1e-12
+                );
+                widened += 1;
+            }
+            envelopes.push(envelope);
+        });
+        assert!(
+            widened > 100,
+            "case {case}: {widened} samples with an upper arm"
+        );
+        replay_online(&moved, |index, online| {
+            let here = online.joint_envelope(moved[index].pose, &prior);
+            match (here, envelopes[index]) {
+                (Some(a), Some(b)) => assert!(
+                    (a.max_shoulder_elevation - b.max_shoulder_elevation).abs() < 1e-6
+                        && (a.min_elbow_flexion - b.min_elbow_flexion).abs() < 1e-6,
+                    "case {case} at {index}: {a:?} moved, {b:?} not"
+                ),
+                (a, b) => assert_eq!(a.is_some(), b.is_some(), "case {case} at {index}"),
+            }
+        });
     }
 }

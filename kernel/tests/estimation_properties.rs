@@ -380,3 +380,50 @@ fn taubin_is_the_generalised_eigenvector_of_its_constraint() {
         );
     }
 }
+
+/// Two points are too few for any circle fit: each says so by name rather
+/// than failing later on a singular step.
+#[test]
+fn two_points_are_too_few_for_every_fit() {
+    let two = [Point::new(0.1, 0.0), Point::new(0.0, 0.1)];
+    let start = Circle {
+        centre: Point::new(0.0, 0.0),
+        radius: 0.1,
+    };
+    assert_eq!(
+        fit_circle_kasa(two.iter().copied()),
+        Err(CircleFitError::TooFewPoints)
+    );
+    assert_eq!(
+        fit_circle_taubin(two.iter().copied()),
+        Err(CircleFitError::TooFewPoints)
+    );
+    assert_eq!(
+        fit_circle_geometric(two.iter().copied(), start).map(|f| f.circle),
+        Err(CircleFitError::TooFewPoints)
+    );
+}
+
+/// The least spread the algebraic fits accept (a mean squared distance
+/// from the centroid of 1e-12 m²) is inclusive: four points 1 µm around
+/// their centroid (exactly that spread in binary) are still a circle.
+#[test]
+fn points_at_exactly_the_least_spread_are_fitted() {
+    let d = 1e-6;
+    let four = [
+        Point::new(-d, 0.0),
+        Point::new(d, 0.0),
+        Point::new(0.0, -d),
+        Point::new(0.0, d),
+    ];
+    for (name, fit) in [
+        ("kasa", fit_circle_kasa(four.iter().copied())),
+        ("taubin", fit_circle_taubin(four.iter().copied())),
+    ] {
+        let circle = fit.unwrap_or_else(|e| panic!("{name}: {e:?}"));
+        assert!(
+            close(circle, Point::new(0.0, 0.0), d, 1e-12),
+            "{name}: {circle:?}"
+        );
+    }
+}

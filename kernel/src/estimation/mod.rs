@@ -40,7 +40,7 @@ pub use hough::{
     hough_circle_chords, hough_circle_normals, ACCUMULATOR_BYTES as HOUGH_ACCUMULATOR_BYTES,
     MAX_VOTES as HOUGH_MAX_VOTES,
 };
-pub use phase::{detect_phases, detect_phases_from, Phases};
+pub use phase::{detect_phases, detect_phases_from, Phases, DEPARTURE_WINDOW, LIFT_PSI};
 
 use crate::geometry::Point;
 use crate::path::{PathSample, PATH_CAPACITY};
