@@ -427,3 +427,56 @@ fn points_at_exactly_the_least_spread_are_fitted() {
         );
     }
 }
+
+/// The refinement is Gauss-Newton: from a forearm circle 5 mm off (centre
+/// and radius) on a noise-free two-phase lift, its `ITERATIONS` passes per
+/// phase converge quadratically to the true arm to within 1e-9 m, which a
+/// step with a wrong normal matrix (converging linearly, if at all) does
+/// not reach. The lift: an arm (l1 0.3 m, l2 0.2 m) flat on the table
+/// lifts its forearm 1.2 rad about the elbow, then its upper arm 0.8 rad
+/// about the shoulder, sampled at 100 Hz.
+#[test]
+fn the_refinement_converges_quadratically_from_a_start_off_the_arm() {
+    use limb_kernel::arm::{ArmGeometry, JointAngles};
+    use limb_kernel::estimation::refine::{Progress, Refinement};
+    use limb_kernel::path::PATH_CAPACITY;
+    let (l1, l2) = (0.3, 0.2);
+    let arm = ArmGeometry::new(l1, l2, Point::new(l1 + l2, 0.0)).unwrap();
+    let (rest, forearm, upper_arm): (usize, usize, usize) = (50, 1000, 1000);
+    let angles = (0..rest + forearm + upper_arm).map(|i| {
+        let forearm_part = (i.saturating_sub(rest).min(forearm)) as f64 / forearm as f64;
+        let upper_part = (i.saturating_sub(rest + forearm)) as f64 / upper_arm as f64;
+        JointAngles {
+            shoulder_elevation: 0.8 * upper_part,
+            elbow_flexion: 1.2 * forearm_part,
+        }
+    });
+    let path: Vec<PathSample> = angles
+        .enumerate()
+        .map(|(i, q)| PathSample {
+            time: i as f64 * 0.01,
+            pose: arm.forward(q),
+            wrench: Wrench::ZERO,
+        })
+        .collect();
+    let lift = path.iter().position(|s| s.pose.psi > 0.05).unwrap();
+    let elbow = Point::new(l2, 0.0);
+    let start = Circle {
+        centre: Point::new(elbow.x + 0.005, elbow.z - 0.005),
+        radius: l2 + 0.005,
+    };
+    let mut refinement = Refinement::new(start, lift..rest + forearm, path.len());
+    let estimate = (0..100)
+        .find_map(|_| match refinement.advance(&path, PATH_CAPACITY) {
+            Progress::Done(outcome) => Some(outcome.expect("refined")),
+            Progress::Running(_) => None,
+        })
+        .expect("the refinement finished");
+    let off = [
+        (estimate.upper_arm_length - l1).abs(),
+        (estimate.forearm_length - l2).abs(),
+        estimate.shoulder.distance(arm.shoulder()),
+        estimate.elbow.distance(elbow),
+    ];
+    assert!(off.iter().all(|&e| e < 1e-9), "{off:?}: {estimate:?}");
+}
