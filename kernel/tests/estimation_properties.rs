@@ -480,3 +480,41 @@ fn the_refinement_converges_quadratically_from_a_start_off_the_arm() {
     ];
     assert!(off.iter().all(|&e| e < 1e-9), "{off:?}: {estimate:?}");
 }
+
+/// A refinement whose forearm phase holds fewer than `MIN_PHASE_SAMPLES`
+/// samples says so by name, and so does one whose upper-arm phase does.
+#[test]
+fn a_refinement_over_too_short_a_phase_is_refused_by_name() {
+    use limb_kernel::estimation::refine::{Progress, Refinement};
+    use limb_kernel::estimation::{EstimateError, MIN_PHASE_SAMPLES};
+    use limb_kernel::path::PATH_CAPACITY;
+    let points = arc(Point::new(0.2, 0.0), 0.2, 0.0, 1.5, 200);
+    let path: Vec<PathSample> = points
+        .iter()
+        .enumerate()
+        .map(|(i, (p, psi))| PathSample {
+            time: i as f64 * 0.01,
+            pose: Pose::new(p.x, p.z, *psi),
+            wrench: Wrench::ZERO,
+        })
+        .collect();
+    let circle = Circle {
+        centre: Point::new(0.2, 0.0),
+        radius: 0.2,
+    };
+    let run = |forearm: core::ops::Range<usize>, len: usize| {
+        let mut refinement = Refinement::new(circle, forearm, len);
+        (0..100)
+            .find_map(|_| match refinement.advance(&path[..len], PATH_CAPACITY) {
+                Progress::Done(outcome) => Some(outcome.map(|_| ())),
+                Progress::Running(_) => None,
+            })
+            .expect("finished")
+    };
+    let short = MIN_PHASE_SAMPLES - 1;
+    assert_eq!(run(0..short, 150), Err(EstimateError::ForearmPhaseTooShort));
+    assert_eq!(
+        run(0..100, 100 + short),
+        Err(EstimateError::UpperArmPhaseTooShort)
+    );
+}
