@@ -68,3 +68,41 @@ fn an_undrained_trace_counts_the_events_it_lost() {
     }
     assert_eq!(kept, TRACE_CAPACITY);
 }
+
+/// An arm at rest at any height is at rest: during the estimation, a
+/// grasp held still 0.3 m above frame S's origin, its forearm at 0.2 rad,
+/// reads zero speed over the rate window (no speed stop), and a drop of
+/// 10 mm in 1 ms (0.2 m/s over the 50 ms window) stops.
+#[test]
+fn an_arm_at_rest_off_the_origin_reads_zero_speed() {
+    let config = KernelConfig::default();
+    let mut kernel = Kernel::new(config).unwrap();
+    let pose = Pose::new(0.1, 0.3, 0.2);
+    let at = |k: usize, pose: Pose| PathSample {
+        time: k as f64 * PERIOD,
+        pose,
+        wrench: Wrench::ZERO,
+    };
+    let steps = (3.0 * config.limits.rate_window / PERIOD) as usize;
+    for k in 0..=steps {
+        assert_eq!(
+            kernel.step(&at(k, pose), at(k, pose).time).state,
+            StateKind::Grasp
+        );
+    }
+    let now = at(steps, pose).time;
+    assert_eq!(
+        kernel.request(Request::StartEstimation, now),
+        Ok(StateKind::Estimate)
+    );
+    for k in steps + 1..=2 * steps {
+        let command = kernel.step(&at(k, pose), at(k, pose).time);
+        assert_eq!(command.state, StateKind::Estimate, "step {k}");
+    }
+    let k = 2 * steps + 1;
+    let dropped = at(k, Pose::new(0.1, 0.29, 0.2));
+    assert_eq!(
+        kernel.step(&dropped, dropped.time).state,
+        StateKind::SafeStop
+    );
+}
