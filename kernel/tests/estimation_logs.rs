@@ -65,9 +65,10 @@ fn hough_and_ls_are_within_a_millimetre_on_the_six_noisy_logs() {
 
 /// Outliers (every 37th sample thrown 5 cm off) and a short corrupted
 /// stretch (0.2 s, 10 cm off, in either phase) move the `Auto` estimate by
-/// less than 3 mm.
+/// less than 0.25 mm (measured: 0.024, 0.035 and 0.0004 mm; without its
+/// robust weights the outliers alone shift a fit by about 5 cm / 37).
 #[test]
-fn outliers_and_a_corrupted_stretch_move_auto_by_less_than_three_mm() {
+fn outliers_and_a_corrupted_stretch_move_auto_by_less_than_a_quarter_millimetre() {
     let log = logs::read("noisy/case3.csv");
     let clean = estimate_arm(&log.path, Method::Auto).expect("clean");
     let corrupt = |keep: &dyn Fn(usize) -> bool, dx: f64, dz: f64| {
@@ -98,7 +99,7 @@ fn outliers_and_a_corrupted_stretch_move_auto_by_less_than_three_mm() {
             .max((e.forearm_length - clean.forearm_length).abs())
             .max(e.shoulder.distance(clean.shoulder))
             .max(e.elbow.distance(clean.elbow));
-        assert!(moved < 3e-3, "{name}: moved {moved} m: {e:?}");
+        assert!(moved < 0.25e-3, "{name}: moved {moved} m: {e:?}");
     }
 }
 
@@ -115,8 +116,8 @@ fn errors(log: &logs::Log, l1: f64, l2: f64, method: Method) -> [f64; 3] {
 
 /// On every labelled effect log `Auto` is never worse than the paper's
 /// Kåsa fit by more than 1 mm (l1, l2, shoulder), and for grasp compliance
-/// and grasp slip it is within 1.5 mm of the truth where Kåsa is centimetres
-/// off.
+/// and grasp slip it is within 1.5 mm and 0.25 mm of the truth where Kåsa
+/// is centimetres off.
 #[test]
 fn auto_is_never_worse_than_kasa_and_corrects_compliance_and_slip() {
     for labelled in logs::labelled_effects() {
@@ -130,9 +131,16 @@ fn auto_is_never_worse_than_kasa_and_corrects_compliance_and_slip() {
                 labelled.effect
             );
         }
-        if ["grasp_compliance", "grasp_slip"].contains(&labelled.effect.as_str()) {
+        // Measured: compliance 0.40 / 0.85 / 1.23 mm, slip 0.012 / 0.028 /
+        // 0.060 mm (l1, l2, shoulder).
+        let bound = match labelled.effect.as_str() {
+            "grasp_compliance" => Some(1.5e-3),
+            "grasp_slip" => Some(0.25e-3),
+            _ => None,
+        };
+        if let Some(bound) = bound {
             assert!(
-                auto.iter().all(|&a| a <= 1.5e-3),
+                auto.iter().all(|&a| a <= bound),
                 "{}: {auto:?}",
                 labelled.effect
             );
@@ -368,4 +376,29 @@ fn the_online_refinement_is_robust_to_a_corrupted_upper_arm_stretch() {
         .max(corrupt.elbow.distance(clean.elbow));
     assert!(moved < 1e-4, "moved {moved} m: {corrupt:?}");
     assert!(corrupt.evidence.upper_arm_residual > 10.0 * e.upper_arm_residual);
+}
+
+/// The batch phase split (`detect_phases`: a look-ahead window over the
+/// whole path) and the kernel's online split (a window behind the newest
+/// sample) are two readings of one definition, the forearm leaving its
+/// circle: on the six logs they agree to within 5 samples, 0.05 s
+/// (measured: 0 to 3).
+#[test]
+fn the_batch_and_online_splits_agree() {
+    use limb_kernel::estimation::{detect_phases, PointModel};
+    for case in 1..=6 {
+        let log = logs::read(&format!("noisy/case{case}.csv"));
+        let batch = detect_phases(&log.path, &PointModel::GRASP).expect("phases");
+        let mut online = OnlineEstimator::new();
+        for end in 1..=log.path.len() {
+            online.record(&log.path[..end]);
+        }
+        let (lift, split) = online.split();
+        assert_eq!(batch.forearm.start, lift, "case {case}");
+        assert!(
+            batch.forearm.end.abs_diff(split) <= 5,
+            "case {case}: batch {:?}, online {lift}..{split}",
+            batch.forearm
+        );
+    }
 }

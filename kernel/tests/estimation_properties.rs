@@ -699,3 +699,32 @@ fn the_hough_peak_is_the_densest_window_of_cells() {
     assert!((circle.radius - 0.102).abs() < 1e-3, "{circle:?}");
     assert!(circle.centre.distance(centre) < 1e-9, "{circle:?}");
 }
+
+/// A lift whose forearm turns past the first fit's arc within a few
+/// samples of lift-off leaves too short a forearm phase, and the batch
+/// split says so by name rather than failing in the fit.
+#[test]
+fn a_forearm_phase_of_a_few_samples_is_too_short() {
+    use limb_kernel::estimation::{detect_phases, EstimateError, PointModel};
+    let psi = |i: usize| {
+        if i < 100 {
+            0.0
+        } else {
+            (0.1 * (i - 99) as f64).min(1.5)
+        }
+    };
+    let path: Vec<PathSample> = (0..400)
+        .map(|i| {
+            let (p, _) = arc(Point::new(0.2, 0.0), 0.2, psi(i), 0.0, 2)[0];
+            PathSample {
+                time: i as f64 * 0.01,
+                pose: Pose::new(p.x, p.z, psi(i)),
+                wrench: Wrench::ZERO,
+            }
+        })
+        .collect();
+    assert_eq!(
+        detect_phases(&path, &PointModel::GRASP).err(),
+        Some(EstimateError::ForearmPhaseTooShort)
+    );
+}
