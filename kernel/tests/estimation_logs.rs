@@ -402,3 +402,24 @@ fn the_batch_and_online_splits_agree() {
         );
     }
 }
+
+/// Non-finite samples are skipped, not counted: with seven NaN poses in
+/// the forearm phase (the moments then lag the newest sample by seven more)
+/// the forearm phase still ends where the departure window begins.
+#[test]
+fn skipped_samples_do_not_move_the_online_split() {
+    let mut path = logs::read("noisy/case2.csv").path;
+    let lift = path.iter().position(|s| s.pose.psi > LIFT_PSI).unwrap();
+    for sample in &mut path[lift + 100..lift + 107] {
+        sample.pose.x = f64::NAN;
+    }
+    let (mut departed, mut previous) = (None, OnlineEstimator::new());
+    replay_online(&path, |index, online| {
+        if previous.phase() == OnlinePhase::Forearm && online.phase() == OnlinePhase::UpperArm {
+            departed = Some(index);
+        }
+        previous = *online;
+    });
+    let departed = departed.expect("departure");
+    assert_eq!(previous.split(), (lift, departed + 1 - DEPARTURE_WINDOW));
+}

@@ -71,7 +71,8 @@ fn an_undrained_trace_counts_the_events_it_lost() {
 
 /// An arm at rest at any height is at rest: during the estimation, a
 /// grasp held still 0.3 m above frame S's origin, its forearm at 0.2 rad,
-/// reads zero speed over the rate window (no speed stop), and a drop of
+/// reads zero velocity over the rate window (no wrench from the damper
+/// while held, no speed stop while lifted), and a drop of
 /// 10 mm in 1 ms (0.2 m/s over the 50 ms window) stops.
 #[test]
 fn an_arm_at_rest_off_the_origin_reads_zero_speed() {
@@ -85,9 +86,13 @@ fn an_arm_at_rest_off_the_origin_reads_zero_speed() {
     };
     let steps = (3.0 * config.limits.rate_window / PERIOD) as usize;
     for k in 0..=steps {
-        assert_eq!(
-            kernel.step(&at(k, pose), at(k, pose).time).state,
-            StateKind::Grasp
+        let command = kernel.step(&at(k, pose), at(k, pose).time);
+        assert_eq!(command.state, StateKind::Grasp);
+        // Held where it rests, still: neither spring nor damper pulls.
+        let w = command.wrench;
+        assert!(
+            w.fx.abs().max(w.fz.abs()).max(w.ty.abs()) < 1e-9,
+            "step {k}: {w:?}"
         );
     }
     let now = at(steps, pose).time;
