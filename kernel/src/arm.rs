@@ -292,6 +292,13 @@ mod tests {
             arm.inverse_from_point(Point::new(0.5, 0.0), ElbowBranch::Flexed),
             Err(KinematicsError::AtShoulder)
         );
+        // 1e-17 m from a shoulder at the origin: within ε · (l1 + l2), so
+        // singular even though the lengths are equal (|l1 − l2| = 0).
+        let at_origin = ArmGeometry::new(0.25, 0.25, Point::new(0.0, 0.0)).unwrap();
+        assert_eq!(
+            at_origin.inverse_from_point(Point::new(-1e-17, 0.0), ElbowBranch::Flexed),
+            Err(KinematicsError::AtShoulder)
+        );
     }
 
     #[test]

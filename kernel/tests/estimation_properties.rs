@@ -734,3 +734,39 @@ fn a_forearm_phase_of_a_few_samples_is_too_short() {
         Some(EstimateError::ForearmPhaseTooShort)
     );
 }
+
+/// A point model's points over any range are its points one by one: the
+/// slip applies from its path index on, wherever the range starts (ranges
+/// before, across and after the slip), and the fit points' corrected
+/// values are the same points.
+#[test]
+fn a_point_model_reads_each_sample_by_its_path_index() {
+    let path: Vec<PathSample> = (0..60)
+        .map(|i| PathSample {
+            time: i as f64 * 0.01,
+            pose: Pose::new(0.01 * i as f64, 0.002 * i as f64, 0.02 * i as f64),
+            wrench: Wrench::new(1.0, -2.0 + 0.1 * i as f64, 0.0),
+        })
+        .collect();
+    let model = PointModel {
+        forearm_length: 0.2,
+        correction: GraspCorrection {
+            compliance: 1e-3,
+            slide: 0.01,
+            offset: Point::new(0.003, -0.002),
+        },
+        slip_index: 30,
+    };
+    for range in [5..25, 20..45, 30..60, 41..59] {
+        let one_by_one: Vec<Point> = range.clone().map(|i| model.point(i, &path[i])).collect();
+        let points: Vec<Point> = model.points(&path, range.clone()).collect();
+        let fitted: Vec<Point> = model
+            .fit_points(&path, range.clone())
+            .map(|p| p.at(model.correction))
+            .collect();
+        assert_eq!(points, one_by_one, "{range:?}");
+        for (f, p) in fitted.iter().zip(&one_by_one) {
+            assert!(f.distance(*p) < 1e-15, "{range:?}: {f:?} vs {p:?}");
+        }
+    }
+}
