@@ -66,7 +66,8 @@ fn the_estimation_motion_is_its_lift_then_a_hold() {
 /// REQ-MON-011: without a provisional forearm (a wrist that never turns: no
 /// arc to fit) the shaped lift never commands a set-point beyond
 /// `LiftShaping::prior_reach` of the grasp: it pauses there, and ends in
-/// `ForearmPhaseTooShort` once `forearm_wait` has passed (HAZ-08).
+/// `ForearmPhaseTooShort` once `forearm_wait` has passed, not before
+/// (HAZ-08).
 #[test]
 fn req_mon_011_without_a_forearm_the_lift_stays_within_the_prior_reach() {
     use limb_kernel::estimation::online::OnlineEstimator;
@@ -80,7 +81,7 @@ fn req_mon_011_without_a_forearm_the_lift_stays_within_the_prior_reach() {
     let mut lift = ShapedLift::new(motion, 0.0);
     let online = OnlineEstimator::new();
     let reach = config.lift_shaping.prior_reach;
-    let mut paused = false;
+    let mut paused = None;
     let mut farthest: f64 = 0.0;
     let period = 0.001;
     let steps = ((motion.total_duration() + config.lift_shaping.forearm_wait) / period) as usize;
@@ -94,11 +95,19 @@ fn req_mon_011_without_a_forearm_the_lift_stays_within_the_prior_reach() {
         match lift.advance(now, &frame, &online, &config) {
             Ok(LiftCommand::Move(set_point) | LiftCommand::Hold(set_point)) => {
                 farthest = farthest.max(set_point.pose.point().distance(grasp.point()));
-                paused |= matches!(lift.phase(), LiftPhase::AwaitingForearm { .. });
+                if let LiftPhase::AwaitingForearm { since } = lift.phase() {
+                    paused = Some(*since);
+                }
             }
             Err(error) => {
                 assert_eq!(error, EstimateError::ForearmPhaseTooShort);
-                assert!(paused, "ended without pausing");
+                let since = paused.expect("ended without pausing");
+                let waited = now - since;
+                let wait = config.lift_shaping.forearm_wait;
+                assert!(
+                    waited > wait && waited <= wait + 2.0 * period,
+                    "ended {waited} s into a {wait} s wait"
+                );
                 assert!(farthest <= reach, "set-point {farthest} m out");
                 assert!(
                     farthest > 0.5 * reach,
