@@ -12,20 +12,22 @@ mod support {
     pub mod logs;
 }
 
-use limb_kernel::estimation::online::OnlineEstimator;
+use limb_kernel::estimation::online::{JointEnvelope, OnlineEstimator};
 use limb_kernel::geometry::Point;
 use limb_kernel::lift::{LiftCommand, LiftEnd, LiftPhase, ShapedLift};
+use limb_kernel::monitor::Limit;
 use limb_kernel::motion::{EstimationMotion, SetPoint};
 use limb_kernel::{KernelConfig, PathSample};
 use support::logs;
 
+/// What one replayed step shows: the frame, the lift's command, the lift,
+/// the online estimate it was given and the planned motion.
+type Each<'a> =
+    dyn FnMut(&PathSample, LiftCommand, &ShapedLift, &OnlineEstimator, &EstimationMotion) + 'a;
+
 /// Replays benchmark log `case` through a lift planned from its first
-/// pose; `each` sees every step's time, command and lift.
-fn replay(
-    case: usize,
-    config: &KernelConfig,
-    each: impl FnMut(f64, LiftCommand, &ShapedLift, &EstimationMotion),
-) {
+/// pose; `each` sees every step.
+fn replay(case: usize, config: &KernelConfig, each: &mut Each) {
     replay_path(
         &logs::read(&format!("noisy/case{case}.csv")).path,
         config,
@@ -34,11 +36,7 @@ fn replay(
 }
 
 /// Replays `path` through a lift planned from its first pose.
-fn replay_path(
-    path: &[PathSample],
-    config: &KernelConfig,
-    mut each: impl FnMut(f64, LiftCommand, &ShapedLift, &EstimationMotion),
-) {
+fn replay_path(path: &[PathSample], config: &KernelConfig, each: &mut Each) {
     let first = path[0];
     let motion = EstimationMotion::new(first.pose, &config.estimation_motion).unwrap();
     let mut lift = ShapedLift::new(motion, first.time);
@@ -49,7 +47,7 @@ fn replay_path(
         let command = lift
             .advance(frame.time, &frame, &online, config)
             .unwrap_or_else(|e| panic!("at {} s: {e:?}", frame.time));
-        each(frame.time, command, &lift, &motion);
+        each(&frame, command, &lift, &online, &motion);
     }
 }
 
@@ -64,7 +62,8 @@ fn an_ended_lift_moves_to_its_hold_holds_it_and_settles() {
     for case in 1..=6 {
         let mut ending = None;
         let (mut moved, mut held, mut settled) = (0, 0, 0);
-        replay(case, &config, |now, command, lift, _| {
+        replay(case, &config, &mut |frame, command, lift, _, _| {
+            let now = frame.time;
             if ending.is_none() {
                 if let LiftPhase::Settling {
                     since,
@@ -124,7 +123,8 @@ fn a_lift_short_of_its_arc_runs_on_along_its_line() {
         ..last
     }));
     let (mut farthest, mut ended) = (0.0f64, None);
-    replay_path(&path, &config, |now, command, lift, motion| {
+    replay_path(&path, &config, &mut |frame, command, lift, _, motion| {
+        let now = frame.time;
         let (start, goal) = (motion.lift().start().point(), motion.lift().goal().point());
         if let (LiftCommand::Move(s), LiftPhase::Lifting) = (command, lift.phase()) {
             let p: Point = s.pose.point();
@@ -145,4 +145,47 @@ fn a_lift_short_of_its_arc_runs_on_along_its_line() {
         (farthest - extension).abs() < 1e-6,
         "{farthest} m beyond the goal"
     );
+}
+
+/// The lift ends at the first step whose worst-case joint angles (the
+/// online estimate's envelope at the measured pose) come within
+/// `joint_margin` of a limit, and says which: with the shoulder's upper
+/// limit lowered to 0.5 rad, and with the elbow's lower limit raised to
+/// 0.3 rad (limits the benchmark lift crosses).
+#[test]
+fn the_lift_ends_at_the_joint_margin_it_reaches_first() {
+    for (limit, lowered) in [(Limit::ShoulderElevation, 0.5), (Limit::ElbowFlexion, 0.3)] {
+        let mut config = KernelConfig::default();
+        match limit {
+            Limit::ShoulderElevation => config.limits.shoulder_elevation.high = lowered,
+            _ => config.limits.elbow_flexion.low = lowered,
+        }
+        let margin = config.lift_shaping.joint_margin;
+        let within = |e: JointEnvelope| match limit {
+            Limit::ShoulderElevation => e.max_shoulder_elevation >= lowered - margin,
+            _ => e.min_elbow_flexion <= lowered + margin,
+        };
+        let mut ended_at = None;
+        replay(1, &config, &mut |frame, _, lift, online, _| {
+            let reached = online
+                .joint_envelope(frame.pose, &config.validation)
+                .is_some_and(within);
+            if ended_at.is_none() && lift.ended().is_some() {
+                ended_at = Some(frame.time);
+                assert_eq!(lift.ended(), Some(LiftEnd::JointMargin(limit)));
+                assert!(
+                    reached,
+                    "{limit:?}: ended at {} s short of the margin",
+                    frame.time
+                );
+            } else if ended_at.is_none() {
+                assert!(
+                    !reached,
+                    "{limit:?}: at {} s within the margin, still lifting",
+                    frame.time
+                );
+            }
+        });
+        assert!(ended_at.is_some(), "{limit:?}: the lift never ended");
+    }
 }
