@@ -257,48 +257,46 @@ mod tests {
         assert!(q.is_finite() && residual < 0.31, "{q:?} {residual}");
     }
 
-    /// The inner edge of the reach is reachable: a grasp exactly |l1 − l2|
-    /// from the shoulder is the fully folded elbow (q2 = π), not out of
-    /// reach (lengths and distance exact in binary).
+    /// The folded elbow (q2 = π) is solved at both edges where it lives: a
+    /// grasp exactly |l1 − l2| from the shoulder (the inner edge of the
+    /// reach, exact in binary) and, for equal lengths, a grasp 2.2e-16 m
+    /// from the shoulder (beyond the singular threshold ε · (l1 + l2),
+    /// 1.1e-16 m). Just inside the inner edge is out of reach; on the
+    /// shoulder, or 1e-17 m from one at the origin, is singular even though
+    /// |l1 − l2| = 0.
     #[test]
-    fn a_grasp_at_the_inner_edge_of_the_reach_is_the_folded_elbow() {
-        let arm = arm(0.5, 0.25);
-        let q = arm
-            .inverse_from_point(Point::new(0.5, 0.0), ElbowBranch::Flexed)
-            .unwrap();
-        assert!(
-            (q.elbow_flexion - core::f64::consts::PI).abs() < 1e-12,
-            "{q:?}"
-        );
-        assert_eq!(
-            arm.inverse_from_point(Point::new(0.500_000_001, 0.0), ElbowBranch::Flexed),
-            Err(KinematicsError::OutOfReach)
-        );
-    }
-
-    /// The singular threshold scales with the arm (ε · (l1 + l2), 1.1e-16 m
-    /// here): an arm of equal lengths folded to a grasp 2.2e-16 m from its
-    /// shoulder is still solved, fully flexed.
-    #[test]
-    fn a_grasp_beyond_the_rounding_of_the_shoulder_is_solved() {
-        let arm = arm(0.25, 0.25);
-        let grasp = Point::new(0.5 - f64::EPSILON, 0.0);
-        let q = arm.inverse_from_point(grasp, ElbowBranch::Flexed).unwrap();
-        assert!(
-            (q.elbow_flexion - core::f64::consts::PI).abs() < 1e-6,
-            "{q:?}"
-        );
-        assert_eq!(
-            arm.inverse_from_point(Point::new(0.5, 0.0), ElbowBranch::Flexed),
-            Err(KinematicsError::AtShoulder)
-        );
-        // 1e-17 m from a shoulder at the origin: within ε · (l1 + l2), so
-        // singular even though the lengths are equal (|l1 − l2| = 0).
+    fn the_folded_elbow_is_solved_at_the_edges_of_its_reach() {
         let at_origin = ArmGeometry::new(0.25, 0.25, Point::new(0.0, 0.0)).unwrap();
-        assert_eq!(
-            at_origin.inverse_from_point(Point::new(-1e-17, 0.0), ElbowBranch::Flexed),
-            Err(KinematicsError::AtShoulder)
-        );
+        for (arm, grasp, tolerance) in [
+            (arm(0.5, 0.25), Point::new(0.5, 0.0), 1e-12),
+            (arm(0.25, 0.25), Point::new(0.5 - f64::EPSILON, 0.0), 1e-6),
+        ] {
+            let q = arm.inverse_from_point(grasp, ElbowBranch::Flexed).unwrap();
+            let off = (q.elbow_flexion - core::f64::consts::PI).abs();
+            assert!(off < tolerance, "{grasp:?}: {q:?}");
+        }
+        for (arm, grasp, error) in [
+            (
+                arm(0.5, 0.25),
+                Point::new(0.500_000_001, 0.0),
+                KinematicsError::OutOfReach,
+            ),
+            (
+                arm(0.25, 0.25),
+                Point::new(0.5, 0.0),
+                KinematicsError::AtShoulder,
+            ),
+            (
+                at_origin,
+                Point::new(-1e-17, 0.0),
+                KinematicsError::AtShoulder,
+            ),
+        ] {
+            assert_eq!(
+                arm.inverse_from_point(grasp, ElbowBranch::Flexed),
+                Err(error)
+            );
+        }
     }
 
     #[test]

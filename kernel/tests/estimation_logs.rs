@@ -94,13 +94,19 @@ fn outliers_and_a_corrupted_stretch_move_auto_by_less_than_a_quarter_millimetre(
     ];
     for (name, path) in cases {
         let e = estimate_arm(&path, Method::Auto).unwrap_or_else(|err| panic!("{name}: {err:?}"));
-        let moved = (e.upper_arm_length - clean.upper_arm_length)
-            .abs()
-            .max((e.forearm_length - clean.forearm_length).abs())
-            .max(e.shoulder.distance(clean.shoulder))
-            .max(e.elbow.distance(clean.elbow));
+        let moved = moved(&e, &clean);
         assert!(moved < 0.25e-3, "{name}: moved {moved} m: {e:?}");
     }
+}
+
+/// How far estimate `e` lies from `reference`: the largest of the length
+/// differences and the elbow and shoulder distances [m].
+fn moved(e: &ArmEstimate, reference: &ArmEstimate) -> f64 {
+    (e.upper_arm_length - reference.upper_arm_length)
+        .abs()
+        .max((e.forearm_length - reference.forearm_length).abs())
+        .max(e.shoulder.distance(reference.shoulder))
+        .max(e.elbow.distance(reference.elbow))
 }
 
 /// Errors (|Δl1|, |Δl2|, shoulder distance) [m] of `method` on a log.
@@ -369,11 +375,7 @@ fn the_online_refinement_is_robust_to_a_corrupted_upper_arm_stretch() {
         sample.pose.z += 0.1;
     }
     let corrupt = estimate_arm(&path, Method::Online).expect("corrupt");
-    let moved = (corrupt.upper_arm_length - clean.upper_arm_length)
-        .abs()
-        .max((corrupt.forearm_length - clean.forearm_length).abs())
-        .max(corrupt.shoulder.distance(clean.shoulder))
-        .max(corrupt.elbow.distance(clean.elbow));
+    let moved = moved(&corrupt, &clean);
     assert!(moved < 1e-4, "moved {moved} m: {corrupt:?}");
     assert!(corrupt.evidence.upper_arm_residual > 10.0 * e.upper_arm_residual);
 }

@@ -31,6 +31,25 @@ fn close(circle: Circle, centre: Point, radius: f64, tolerance: f64) -> bool {
     (circle.radius - radius).abs() <= tolerance && circle.centre.distance(centre) <= tolerance
 }
 
+/// Kåsa's and Taubin's fits of the noise-free arc `arc(centre, radius,
+/// start, span, n)`, named.
+fn algebraic_fits(
+    centre: Point,
+    radius: f64,
+    start: f64,
+    span: f64,
+    n: usize,
+) -> [(&'static str, Result<Circle, CircleFitError>); 2] {
+    let points: Vec<Point> = arc(centre, radius, start, span, n)
+        .into_iter()
+        .map(|(p, _)| p)
+        .collect();
+    [
+        ("kasa", fit_circle_kasa(points.iter().copied())),
+        ("taubin", fit_circle_taubin(points.iter().copied())),
+    ]
+}
+
 proptest! {
     /// Any noise-free arc of ≥ 30° is recovered to 0.1 mm by Kåsa, Taubin and
     /// the geometric fit, and by both bounded Hough variants (exact on
@@ -239,14 +258,7 @@ fn taubin_is_near_the_geometric_fit_on_noisy_arcs() {
 #[test]
 fn a_circle_beyond_the_largest_radius_is_degenerate() {
     let radius = 1.0e4;
-    let points: Vec<Point> = arc(Point::new(0.0, -radius), radius, -2.5e-5, 5.0e-5, 50)
-        .into_iter()
-        .map(|(p, _)| p)
-        .collect();
-    for (name, fit) in [
-        ("kasa", fit_circle_kasa(points.iter().copied())),
-        ("taubin", fit_circle_taubin(points.iter().copied())),
-    ] {
+    for (name, fit) in algebraic_fits(Point::new(0.0, -radius), radius, -2.5e-5, 5.0e-5, 50) {
         assert_eq!(fit, Err(CircleFitError::Degenerate), "{name}");
     }
 }
@@ -258,14 +270,7 @@ fn a_circle_beyond_the_largest_radius_is_degenerate() {
 fn a_circle_inside_the_largest_radius_is_fitted() {
     let radius = 100.0;
     let centre = Point::new(3.0, -radius);
-    let points: Vec<Point> = arc(centre, radius, 0.0, core::f64::consts::FRAC_PI_2, 50)
-        .into_iter()
-        .map(|(p, _)| p)
-        .collect();
-    for (name, fit) in [
-        ("kasa", fit_circle_kasa(points.iter().copied())),
-        ("taubin", fit_circle_taubin(points.iter().copied())),
-    ] {
+    for (name, fit) in algebraic_fits(centre, radius, 0.0, core::f64::consts::FRAC_PI_2, 50) {
         let circle = fit.unwrap_or_else(|e| panic!("{name}: {e:?}"));
         assert!(close(circle, centre, radius, 1e-6), "{name}: {circle:?}");
     }
@@ -275,15 +280,7 @@ fn a_circle_inside_the_largest_radius_is_fitted() {
 /// 1e60 m circle) are a degenerate geometry, not non-finite data.
 #[test]
 fn finite_points_far_apart_are_degenerate_not_non_finite() {
-    let radius = 1.0e60;
-    let points: Vec<Point> = arc(Point::new(0.0, 0.0), radius, 0.0, 1.0, 50)
-        .into_iter()
-        .map(|(p, _)| p)
-        .collect();
-    for (name, fit) in [
-        ("kasa", fit_circle_kasa(points.iter().copied())),
-        ("taubin", fit_circle_taubin(points.iter().copied())),
-    ] {
+    for (name, fit) in algebraic_fits(Point::new(0.0, 0.0), 1.0e60, 0.0, 1.0, 50) {
         assert_eq!(fit, Err(CircleFitError::Degenerate), "{name}");
     }
 }
