@@ -767,3 +767,18 @@ fn a_point_model_reads_each_sample_by_its_path_index() {
         }
     }
 }
+
+/// A circle's RMS residual is the root mean square of the points' signed
+/// distances from it, 0 for no points.
+#[test]
+fn a_circle_s_rms_residual_is_over_every_point() {
+    let circle = Circle {
+        centre: Point::new(0.3, -0.1),
+        radius: 0.2,
+    };
+    let at = |angle: f64, r: f64| Point::new(0.3 + r * angle.cos(), -0.1 + r * angle.sin());
+    let points = [at(0.0, 0.21), at(1.0, 0.19), at(2.0, 0.23), at(3.0, 0.2)];
+    let expected = ((0.01f64.powi(2) + 0.01f64.powi(2) + 0.03f64.powi(2)) / 4.0).sqrt();
+    assert!((circle.rms_residual(points.iter().copied()) - expected).abs() < 1e-12);
+    assert_eq!(circle.rms_residual(core::iter::empty()), 0.0);
+}

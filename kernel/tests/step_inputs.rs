@@ -3,6 +3,7 @@
 //! and a trace nobody drains.
 
 use limb_kernel::geometry::{Pose, Wrench};
+use limb_kernel::state::State;
 use limb_kernel::trace::TRACE_CAPACITY;
 use limb_kernel::{Kernel, KernelConfig, PathSample, Request, StateKind};
 
@@ -100,6 +101,11 @@ fn an_arm_at_rest_off_the_origin_reads_zero_speed() {
         kernel.request(Request::StartEstimation, now),
         Ok(StateKind::Estimate)
     );
+    // The estimation's motion starts from the held pose.
+    match kernel.state() {
+        State::Estimate(estimating) => assert_eq!(estimating.grasp_pose(), pose),
+        other => panic!("{:?}", other.kind()),
+    }
     for k in steps + 1..=2 * steps {
         let command = kernel.step(&at(k, pose), at(k, pose).time);
         assert_eq!(command.state, StateKind::Estimate, "step {k}");
