@@ -261,8 +261,9 @@ fn replay_online(path: &[PathSample], mut each: impl FnMut(usize, &OnlineEstimat
 /// -off is the first sample whose ψ exceeds `LIFT_PSI`; the forearm phase
 /// ends `DEPARTURE_WINDOW` samples before the sample that decides the
 /// departure (the window's first); the forearm's arc is the largest ψ of
-/// the phase above ψ at lift-off. A sample with a non-finite pose is not
-/// recorded at all.
+/// the phase above ψ at lift-off; once caught up, the upper arm's fit
+/// holds every sample from the split on. A sample with a non-finite pose
+/// is not recorded at all.
 #[test]
 fn the_online_split_and_forearm_arc_follow_their_definitions() {
     for case in 1..=6 {
@@ -292,6 +293,14 @@ fn the_online_split_and_forearm_arc_follow_their_definitions() {
         assert_eq!(online.split(), (lift, departed + 1 - DEPARTURE_WINDOW));
         let highest = (lift..=departed).map(psi).fold(f64::MIN, f64::max);
         assert_eq!(online.arcs().0, highest - psi(lift), "case {case}");
+        // Caught up: every sample from the split to the newest is in the
+        // upper arm's fit.
+        let upper = online.upper_arm().expect("provisional upper arm");
+        assert_eq!(
+            upper.count,
+            log.path.len() - online.split().1,
+            "case {case}"
+        );
     }
 }
 
