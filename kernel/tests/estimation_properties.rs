@@ -31,6 +31,33 @@ fn close(circle: Circle, centre: Point, radius: f64, tolerance: f64) -> bool {
     (circle.radius - radius).abs() <= tolerance && circle.centre.distance(centre) <= tolerance
 }
 
+/// Deterministic 53-bit draws: a 64-bit LCG (Knuth's MMIX constants),
+/// its top 53 bits, as a fraction of 2^53 in [0, 1).
+fn lcg(seed: u64) -> impl FnMut() -> f64 {
+    let mut state = seed;
+    move || {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// Deterministic uniform noise in ±`half_width` [m].
+fn uniform_noise(seed: u64, half_width: f64) -> impl FnMut() -> f64 {
+    let mut draw = lcg(seed);
+    move || (draw() - 0.5) * 2.0 * half_width
+}
+
+/// Deterministic standard normal draws (Box-Muller on the LCG, each draw
+/// moved half a step off 0 so that its logarithm is finite).
+fn normal(seed: u64) -> impl FnMut() -> f64 {
+    let mut draw = lcg(seed);
+    let half_step = 0.5 / (1u64 << 53) as f64;
+    let mut uniform = move || draw() + half_step;
+    move || (-2.0 * uniform().ln()).sqrt() * (2.0 * core::f64::consts::PI * uniform()).cos()
+}
+
 /// Kåsa's and Taubin's fits of the noise-free arc `arc(centre, radius,
 /// start, span, n)`, named.
 fn algebraic_fits(
@@ -220,15 +247,7 @@ fn degenerate_inputs_are_typed_errors() {
 /// tell them apart (there the root is 0).
 #[test]
 fn taubin_is_near_the_geometric_fit_on_noisy_arcs() {
-    // Deterministic uniform noise of ±4 mm (a 64-bit LCG, Knuth's MMIX
-    // constants).
-    let mut state = 0x9E37_79B9_7F4A_7C15u64;
-    let mut noise = move || {
-        state = state
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 0.008
-    };
+    let mut noise = uniform_noise(0x9E37_79B9_7F4A_7C15, 0.004);
     let (centre, radius) = (Point::new(0.12, -0.05), 0.3);
     for span in [0.7, 1.5, 2.5] {
         let points: Vec<Point> = arc(centre, radius, 0.2, span, 300)
@@ -315,13 +334,7 @@ fn a_circle_is_valid_only_when_finite_with_a_positive_radius() {
 /// circle, on arcs noisy enough (±20 mm) that the root is far from 0.
 #[test]
 fn taubin_is_the_generalised_eigenvector_of_its_constraint() {
-    let mut state = 0x2545_F491_4F6C_DD1Du64;
-    let mut noise = move || {
-        state = state
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 0.04
-    };
+    let mut noise = uniform_noise(0x2545_F491_4F6C_DD1D, 0.02);
     for (span, n) in [(0.7, 300), (1.5, 200), (2.5, 100), (4.0, 60)] {
         let points: Vec<Point> = arc(Point::new(0.12, -0.05), 0.3, 0.2, span, n)
             .into_iter()
@@ -514,18 +527,6 @@ fn a_refinement_over_too_short_a_phase_is_refused_by_name() {
         run(0..100, 100 + short),
         Err(EstimateError::UpperArmPhaseTooShort)
     );
-}
-
-/// Deterministic standard normal draws (a 64-bit LCG and Box-Muller).
-fn normal(seed: u64) -> impl FnMut() -> f64 {
-    let mut state = seed;
-    let mut uniform = move || {
-        state = state
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        ((state >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    };
-    move || (-2.0 * uniform().ln()).sqrt() * (2.0 * core::f64::consts::PI * uniform()).cos()
 }
 
 /// The moment fit's stated uncertainty is the spread it actually has: over
