@@ -219,6 +219,31 @@ mod tests {
         assert!(pose.x.abs() < 1e-12 && pose.z.abs() < 1e-12 && pose.psi == 0.0);
     }
 
+    /// |S − G| = 0.3 + 0.2 = 0.5 m exactly in binary floating point: the
+    /// edge of the reach belongs to it (the straight arm), not beyond it.
+    #[test]
+    fn a_grasp_at_exactly_full_reach_is_the_straight_arm() {
+        match arm(0.3, 0.2).inverse_from_point(Point::new(0.0, 0.0), ElbowBranch::Flexed) {
+            Ok(q) => assert!(
+                q.shoulder_elevation.abs() < 1e-7 && q.elbow_flexion.abs() < 1e-7,
+                "{q:?}"
+            ),
+            Err(e) => panic!("full reach refused: {e:?}"),
+        }
+    }
+
+    /// The singular distance scales with the arm, ε·(l1 + l2) = 1.1e-16 m
+    /// for l1 = l2 = 0.25 m: a grasp one rounding step (5.6e-17 m) from the
+    /// shoulder is at the shoulder, not a folded elbow with an arbitrary q1.
+    #[test]
+    fn a_grasp_one_rounding_step_from_the_shoulder_is_at_the_shoulder() {
+        let below_half = 0.5 - f64::EPSILON / 4.0;
+        assert_eq!(
+            arm(0.25, 0.25).inverse_from_point(Point::new(below_half, 0.0), ElbowBranch::Flexed),
+            Err(KinematicsError::AtShoulder)
+        );
+    }
+
     #[test]
     fn construction_rejects_bad_numbers() {
         let s = Point::new(0.5, 0.0);

@@ -459,6 +459,24 @@ mod tests {
         assert_eq!(KernelConfig::default().check(), Ok(()));
     }
 
+    /// A range of one value (a known arm) is a range: min = max is valid.
+    #[allow(clippy::field_reassign_with_default)]
+    #[test]
+    fn a_length_range_of_one_value_is_valid() {
+        let mut config = KernelConfig::default();
+        config.validation.max_upper_arm_length = config.validation.min_upper_arm_length;
+        config.validation.min_forearm_length = config.validation.max_forearm_length;
+        assert_eq!(config.check(), Ok(()));
+        config.validation.max_upper_arm_length *= 0.999;
+        assert_eq!(
+            config.check(),
+            Err(ConfigError::new(
+                ConfigField::MaxUpperArmLength,
+                ConfigProblem::BelowMinimum
+            ))
+        );
+    }
+
     // Each case changes one field of the default on purpose.
     #[allow(clippy::field_reassign_with_default)]
     #[test]

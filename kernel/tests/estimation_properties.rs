@@ -451,7 +451,8 @@ fn the_refinement_converges_quadratically_from_a_start_off_the_arm() {
     use limb_kernel::estimation::refine::{Progress, Refinement};
     use limb_kernel::path::PATH_CAPACITY;
     let (l1, l2) = (0.3, 0.2);
-    let arm = ArmGeometry::new(l1, l2, Point::new(l1 + l2, 0.0)).unwrap();
+    // The shoulder off both axes: a mixed-up coordinate cannot pass.
+    let arm = ArmGeometry::new(l1, l2, Point::new(l1 + l2 + 0.03, 0.1)).unwrap();
     let (rest, forearm, upper_arm): (usize, usize, usize) = (50, 1000, 1000);
     let angles = (0..rest + forearm + upper_arm).map(|i| {
         let forearm_part = (i.saturating_sub(rest).min(forearm)) as f64 / forearm as f64;
@@ -470,7 +471,7 @@ fn the_refinement_converges_quadratically_from_a_start_off_the_arm() {
         })
         .collect();
     let lift = path.iter().position(|s| s.pose.psi > 0.05).unwrap();
-    let elbow = Point::new(l2, 0.0);
+    let elbow = Point::new(l2 + 0.03, 0.1);
     let start = Circle {
         centre: Point::new(elbow.x + 0.005, elbow.z - 0.005),
         radius: l2 + 0.005,
@@ -489,6 +490,17 @@ fn the_refinement_converges_quadratically_from_a_start_off_the_arm() {
         estimate.elbow.distance(elbow),
     ];
     assert!(off.iter().all(|&e| e < 1e-9), "{off:?}: {estimate:?}");
+    // The evidence arcs: the forearm's turn over its phase, the upper
+    // arm's 0.8 · 999/1000 rad over its own.
+    let forearm_turn = path[rest + forearm - 1].pose.psi - path[lift].pose.psi;
+    let arcs = [
+        (estimate.evidence.forearm_arc, forearm_turn),
+        (estimate.evidence.upper_arm_arc, 0.8 * 0.999),
+    ];
+    assert!(
+        arcs.iter().all(|(got, want)| (got - want).abs() < 1e-9),
+        "{arcs:?}"
+    );
 }
 
 /// A refinement whose forearm phase holds fewer than `MIN_PHASE_SAMPLES`
@@ -523,6 +535,9 @@ fn a_refinement_over_too_short_a_phase_is_refused_by_name() {
     };
     let short = MIN_PHASE_SAMPLES - 1;
     assert_eq!(run(0..short, 150), Err(EstimateError::ForearmPhaseTooShort));
+    // Exactly the least is enough, for either phase.
+    assert_eq!(run(0..MIN_PHASE_SAMPLES, 150), Ok(()));
+    assert_eq!(run(0..100, 100 + MIN_PHASE_SAMPLES), Ok(()));
     assert_eq!(
         run(0..100, 100 + short),
         Err(EstimateError::UpperArmPhaseTooShort)
@@ -530,7 +545,7 @@ fn a_refinement_over_too_short_a_phase_is_refused_by_name() {
 }
 
 /// The moment fit's stated uncertainty is the spread it actually has: over
-/// 400 arcs (r 0.25 m, 1 rad, 100 points) with 1 mm Gaussian noise, the
+/// 400 arcs (r 0.3 m, 1 rad, 100 points) with 1 mm Gaussian noise, the
 /// reported 1σ of the radius and of the centre (the larger coordinate's)
 /// match the empirical standard deviations of the fits within 20 %, and
 /// the RMS residual matches the noise within 10 %, for arcs starting
@@ -542,7 +557,7 @@ fn a_refinement_over_too_short_a_phase_is_refused_by_name() {
 fn the_moment_fit_states_the_uncertainty_it_has() {
     use limb_kernel::estimation::moments::{CircleMoments, MomentFit};
     let mut noise = normal(0x5DEE_CE66_D1CE_4E5B);
-    let (centre, radius, sigma) = (Point::new(0.1, -0.2), 0.25, 1e-3);
+    let (centre, radius, sigma) = (Point::new(0.1, -0.2), 0.3, 1e-3);
     let sd = |values: &[f64]| {
         let mean = values.iter().sum::<f64>() / values.len() as f64;
         (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (values.len() - 1) as f64).sqrt()
@@ -683,7 +698,7 @@ fn chords_of_the_shortest_length_vote() {
 }
 
 /// The coarse peak is the densest window of five 1 mm cells, not the
-/// tallest cell: fifteen votes spread over 100-104 mm outweigh twelve
+/// tallest cell: fifteen votes spread over 100-104 mm outweigh thirteen
 /// stacked on 200-201 mm (the fine mean then takes the wide cluster,
 /// give or take its edge cell).
 #[test]
@@ -691,7 +706,7 @@ fn the_hough_peak_is_the_densest_window_of_cells() {
     let centre = Point::new(0.4, 0.1);
     // Each pair (i, i + half) meets at the centre on its own radius.
     let mut radii: Vec<f64> = (0..5).flat_map(|j| [0.100 + 0.001 * j as f64; 3]).collect();
-    radii.extend([0.200; 6]);
+    radii.extend([0.200; 7]);
     radii.extend([0.201; 6]);
     let half = radii.len();
     let sample = |i: usize| {

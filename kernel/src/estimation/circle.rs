@@ -240,3 +240,79 @@ pub fn fit_circle_taubin<I: Iterator<Item = Point> + Clone>(
     let b = (m.zw * (m.xx - x) - m.xw * m.xz) / det / 2.0;
     circle_from_centred(&m, a, b, a * a + b * b + mz)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    type Fit = fn(core::slice::Iter<'_, Point>) -> Result<Circle, CircleFitError>;
+    const FITS: [(&str, Fit); 2] = [
+        ("Kåsa", |p| fit_circle_kasa(p.copied())),
+        ("Taubin", |p| fit_circle_taubin(p.copied())),
+    ];
+
+    /// Three points fix a circle: the fewest either fit takes.
+    #[test]
+    fn three_points_on_a_circle_are_fitted_exactly() {
+        let points = [
+            Point::new(0.3, 0.1),
+            Point::new(0.1, 0.3),
+            Point::new(-0.1, 0.1),
+        ];
+        for (name, fit) in FITS {
+            let circle = fit(points.iter()).unwrap_or_else(|e| panic!("{name}: {e:?}"));
+            assert!(
+                circle.centre.distance(Point::new(0.1, 0.1)) < 1e-12
+                    && (circle.radius - 0.2).abs() < 1e-12,
+                "{name}: {circle:?}"
+            );
+        }
+    }
+
+    /// Exactly collinear points are a degenerate circle (a line), for
+    /// Taubin too, whose root is then exactly 0: not a non-finite one.
+    #[test]
+    fn exactly_collinear_points_are_degenerate() {
+        let points = [
+            Point::new(0.0, 0.2),
+            Point::new(0.1, 0.2),
+            Point::new(0.2, 0.2),
+            Point::new(0.4, 0.2),
+        ];
+        for (name, fit) in FITS {
+            assert_eq!(
+                fit(points.iter()),
+                Err(CircleFitError::Degenerate),
+                "{name}"
+            );
+        }
+    }
+
+    /// A radius whose square overflowed is non-finite even when the centre
+    /// is finite; each of the three numbers is checked on its own.
+    #[test]
+    fn each_non_finite_number_of_a_centred_circle_is_refused() {
+        let m = moments(
+            [
+                Point::new(0.0, 0.0),
+                Point::new(1.0, 0.0),
+                Point::new(0.0, 1.0),
+            ]
+            .into_iter(),
+        )
+        .unwrap_or_else(|e| panic!("{e:?}"));
+        for (a, b, r2) in [
+            (0.1, 0.1, f64::INFINITY),
+            (0.1, 0.1, f64::NAN),
+            (f64::NAN, 0.1, 0.5),
+            (0.1, f64::INFINITY, 0.5),
+        ] {
+            assert_eq!(
+                circle_from_centred(&m, a, b, r2),
+                Err(CircleFitError::NonFinite),
+                "a {a}, b {b}, r² {r2}"
+            );
+        }
+        assert!(circle_from_centred(&m, 0.1, 0.1, 0.5).is_ok());
+    }
+}

@@ -307,3 +307,126 @@ pub fn detect_slip(
         ..slipped
     }))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::{Pose, Wrench};
+    use crate::path::GraspPath;
+
+    /// Resting elbow E0 and forearm length l2 of the synthetic phase 1 [m].
+    const ELBOW: Point = Point::new(0.25, 0.05);
+    const FOREARM: f64 = 0.22;
+
+    /// Phase 1 of a lift: ψ from 0 to 0.6 rad over `n` samples at 100 Hz
+    /// about [`ELBOW`], the grasp at G = E0 − (l2 + s·slide) u + s·offset
+    /// (s = 1 from `slip_at` on), plus `noise(i)` [m].
+    fn phase_one(
+        n: usize,
+        slip_at: usize,
+        slip: (f64, Point),
+        noise: impl Fn(usize) -> Point,
+    ) -> GraspPath {
+        (0..n)
+            .map(|i| {
+                let psi = 0.6 * i as f64 / n as f64;
+                let u = Point::new(libm::cos(psi), -libm::sin(psi));
+                let (slide, offset) = if i >= slip_at {
+                    slip
+                } else {
+                    (0.0, Point::default())
+                };
+                let reach = FOREARM + slide;
+                let e = noise(i);
+                PathSample {
+                    time: i as f64 * 0.01,
+                    pose: Pose::new(
+                        ELBOW.x - reach * u.x + offset.x + e.x,
+                        ELBOW.z - reach * u.z + offset.z + e.z,
+                        psi,
+                    ),
+                    wrench: Wrench::ZERO,
+                }
+            })
+            .collect()
+    }
+
+    fn quiet(_: usize) -> Point {
+        Point::default()
+    }
+
+    /// Uniform ±`half_width` [m] per coordinate from a fixed LCG.
+    fn uniform(half_width: f64) -> impl Fn(usize) -> Point {
+        move |i| {
+            let draw = |k: u64| {
+                let x = k
+                    .wrapping_mul(6_364_136_223_846_793_005)
+                    .wrapping_add(1_442_695_040_888_963_407);
+                (x >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+            };
+            let k = i as u64 * 2 + 7;
+            Point::new(half_width * draw(k), half_width * draw(k * 31 + 1))
+        }
+    }
+
+    /// Fewer than three samples are too short a phase, by name, not a
+    /// singular solve.
+    #[test]
+    fn two_samples_are_too_short_a_forearm_phase() {
+        let path = phase_one(200, usize::MAX, (0.0, Point::default()), quiet);
+        let rigid = FreeCorrections::default();
+        assert_eq!(
+            fit_forearm_pose(&path, 0..2, &PointModel::GRASP, rigid),
+            Err(EstimateError::ForearmPhaseTooShort)
+        );
+        assert!(fit_forearm_pose(&path, 0..3, &PointModel::GRASP, rigid).is_ok());
+    }
+
+    /// The Cauchy scale the fit hands on follows the noise it sees: with
+    /// ±3 mm of noise it is NOISE_MULTIPLE × the weighted RMS distance,
+    /// well above its 1 mm floor (a scale stuck at the floor would weigh
+    /// the inliers as outliers).
+    #[test]
+    fn the_robust_scale_follows_the_noise() {
+        let path = phase_one(300, usize::MAX, (0.0, Point::default()), uniform(3e-3));
+        let pose = fit_forearm_pose(
+            &path,
+            0..300,
+            &PointModel::GRASP,
+            FreeCorrections::default(),
+        )
+        .unwrap_or_else(|e| panic!("{e:?}"));
+        assert!(
+            pose.robust_scale > 2.0 * ROBUST_SCALE && pose.robust_scale < 3.0 * pose.rms,
+            "{pose:?}"
+        );
+        assert!(pose.elbow.distance(ELBOW) < 2e-3, "{pose:?}");
+    }
+
+    /// A slip (10 mm slide, grasp frame moved by (4, −3) mm) is recovered
+    /// exactly from noise-free data, each component with its sign.
+    #[test]
+    fn a_slip_is_recovered_component_by_component() {
+        let (slide, offset) = (0.01, Point::new(0.004, -0.003));
+        let path = phase_one(300, 120, (slide, offset), quiet);
+        let model = PointModel {
+            slip_index: 120,
+            ..PointModel::GRASP
+        };
+        let free = FreeCorrections {
+            compliance: false,
+            slip: true,
+        };
+        let pose =
+            fit_forearm_pose(&path, 0..300, &model, free).unwrap_or_else(|e| panic!("{e:?}"));
+        let c = pose.correction;
+        let off = [
+            c.slide - slide,
+            c.offset.x - offset.x,
+            c.offset.z - offset.z,
+            pose.forearm_length - FOREARM,
+            pose.elbow.distance(ELBOW),
+        ];
+        assert!(off.iter().all(|e| e.abs() < 1e-9), "{off:?}");
+    }
+}

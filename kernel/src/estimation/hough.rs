@@ -62,8 +62,10 @@ pub const FINE_WINDOW: f64 = 2.0e-3;
 pub const MAX_VOTES: usize = PATH_CAPACITY / 2;
 // Every accumulator cell is a u16: it cannot overflow.
 const _: () = assert!(MAX_VOTES <= u16::MAX as usize);
+/// The radius accumulator: votes per cell.
+type Accumulator = [u16; BINS];
 /// Accumulator size [bytes].
-pub const ACCUMULATOR_BYTES: usize = BINS * core::mem::size_of::<u16>();
+pub const ACCUMULATOR_BYTES: usize = core::mem::size_of::<Accumulator>();
 /// Smallest sine of the angle between two centre lines that still votes:
 /// nearly parallel lines meet far away and carry no information (3°).
 const MIN_LINE_SINE: f64 = 0.05;
@@ -212,7 +214,7 @@ fn vote<I>(candidates: I) -> Result<Circle, CircleFitError>
 where
     I: Iterator<Item = Option<Candidate>> + Clone,
 {
-    let mut accumulator = [0u16; BINS];
+    let mut accumulator: Accumulator = [0; BINS];
     for index in candidates.clone().flatten().filter_map(|c| cell(c.radius)) {
         if let Some(slot) = accumulator.get_mut(index) {
             *slot = slot.checked_add(1).ok_or(CircleFitError::TooManyPoints)?;
@@ -255,5 +257,26 @@ where
         Ok(circle)
     } else {
         Err(CircleFitError::NonFinite)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Centre lines at exactly the smallest sine still meet; a hair below
+    /// it they cast no vote.
+    #[test]
+    fn lines_at_exactly_the_smallest_sine_meet() {
+        let horizontal = CentreLine {
+            point: Point::new(0.0, 0.0),
+            direction: Point::new(1.0, 0.0),
+        };
+        let at = |sine: f64| CentreLine {
+            point: Point::new(0.0, 1.0),
+            direction: Point::new(libm::sqrt(1.0 - sine * sine), sine),
+        };
+        assert!(intersect(horizontal, at(MIN_LINE_SINE)).is_some());
+        assert!(intersect(horizontal, at(MIN_LINE_SINE * (1.0 - 1e-9))).is_none());
     }
 }

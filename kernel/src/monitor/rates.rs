@@ -95,6 +95,38 @@ impl RateWindow {
     }
 }
 
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::{Pose, Wrench};
+
+    /// A grasp moving at a constant velocity, read every 10 ms through a
+    /// 50 ms window: each rate is the velocity itself, not a difference.
+    #[test]
+    fn the_rates_of_a_uniform_motion_are_its_velocity() {
+        let mut window = RateWindow::new(0.05);
+        for k in 0..=12 {
+            let t = f64::from(k) * 0.01;
+            window.push(PathSample {
+                time: t,
+                pose: Pose::new(0.1 * t, -0.2 * t, 0.5 * t),
+                wrench: Wrench::new(3.0 * t, -4.0 * t, 0.0),
+            });
+        }
+        let rates = window.rates();
+        let expected = [0.1, -0.2, 0.5, 5.0];
+        let got = [
+            rates.velocity.x,
+            rates.velocity.z,
+            rates.velocity.psi,
+            rates.force_rate,
+        ];
+        for (g, e) in got.iter().zip(expected) {
+            assert!((g - e).abs() < 1e-9, "{got:?} != {expected:?}");
+        }
+    }
+}
+
 /// Proof of the rate window behind REQ-MON-002 and REQ-MON-003.
 #[cfg(any(test, kani))]
 mod verification {
