@@ -34,7 +34,7 @@ pub use circle::{fit_circle_kasa, fit_circle_taubin, Circle, CircleFitError};
 pub use geometric::{fit_circle_geometric, GeometricFit};
 pub use grasp::{
     detect_compliance, detect_slip, fit_forearm_pose, FitPoint, ForearmPose, FreeCorrections,
-    GraspCorrection,
+    GraspCorrection, MIN_SLIP_SAMPLES,
 };
 pub use hough::{
     hough_circle_chords, hough_circle_normals, ACCUMULATOR_BYTES as HOUGH_ACCUMULATOR_BYTES,
