@@ -3,7 +3,9 @@
 //! Ground-truth columns of the log are never read.
 
 use crate::error::{emit, print_json, CliError};
+use limb_kernel::estimation::outlier::OUTLIER_WINDOW;
 use limb_kernel::estimation::{estimate_arm, FitEvidence, Method};
+use limb_kernel::geometry::Point;
 use limb_kernel::path::{is_due, PathSample, PATH_CAPACITY};
 use limb_kernel::validate::{validate, ValidationLimits};
 use std::path::Path;
@@ -72,7 +74,7 @@ pub fn run(log: &Path, method: MethodArg, json: bool) -> Result<(), CliError> {
     })?;
     let rejection = validate(
         &estimate,
-        path.first().map(|s| s.pose.point()).unwrap_or_default(),
+        grasp_at_rest(&path),
         &ValidationLimits::default(),
     )
     .err()
@@ -94,7 +96,7 @@ pub fn run(log: &Path, method: MethodArg, json: bool) -> Result<(), CliError> {
     emit(&format!(
         "method    {:?}\nl1        {:.4} m (upper arm)\nl2        {:.4} m (forearm, elbow to grasp)\n\
          elbow     ({:.4}, {:.4}) m, frame S, t = 0\nshoulder  ({:.4}, {:.4}) m, frame S\nsamples   {}\n\
-         validator {}\n",
+         outliers  {} (isolated samples left out of the fits)\nvalidator {}\n",
         report.method,
         report.l1,
         report.l2,
@@ -103,8 +105,25 @@ pub fn run(log: &Path, method: MethodArg, json: bool) -> Result<(), CliError> {
         report.shoulder[0],
         report.shoulder[1],
         report.samples,
+        report.evidence.outliers,
         report.rejection.as_deref().unwrap_or("accepted")
     ))
+}
+
+/// The grasp point at rest that the validator checks the model against
+/// (frame S): the componentwise median of the first [`OUTLIER_WINDOW`]
+/// path samples, so that one glitched first sample (which the outlier test
+/// cannot judge: it has no earlier neighbours) does not decide the verdict;
+/// the kernel itself takes the mean of its 64-frame Grasp hold. The origin
+/// for an empty path (which the estimator has already refused).
+fn grasp_at_rest(path: &[PathSample]) -> Point {
+    let first = &path[..path.len().min(OUTLIER_WINDOW)];
+    let median = |of: fn(&PathSample) -> f64| {
+        let mut values: Vec<f64> = first.iter().map(of).collect();
+        values.sort_unstable_by(f64::total_cmp);
+        values.get(values.len() / 2).copied().unwrap_or_default()
+    };
+    Point::new(median(|s| s.pose.x), median(|s| s.pose.z))
 }
 
 /// The samples the kernel would record from a log: at most one per

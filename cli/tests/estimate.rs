@@ -87,3 +87,52 @@ fn ground_truth_columns_are_ignored() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// REQ-EST-005 through the CLI: a log with a grasp sample thrown 5.8 cm off
+/// on every 37th row is estimated as the clean log is (l1, l2 within
+/// 0.1 mm), validated, and `evidence.outliers` counts the thrown rows the
+/// estimator could judge (from lift-off on, the last two rows excepted).
+#[test]
+fn isolated_outliers_are_counted_in_the_evidence() {
+    let text = std::fs::read_to_string(CASE3).expect("case3");
+    let mut lines = text.lines();
+    let header = lines.next().expect("header");
+    let columns: Vec<&str> = header.split(',').collect();
+    let column = |name: &str| columns.iter().position(|c| *c == name).expect(name);
+    let (x, z, psi) = (column("x"), column("z"), column("psi"));
+    let mut rows: Vec<Vec<String>> = lines
+        .map(|line| line.split(',').map(str::to_owned).collect())
+        .collect();
+    let lift = rows
+        .iter()
+        .position(|row| row[psi].parse::<f64>().unwrap() > 0.05)
+        .expect("lift-off");
+    for row in rows.iter_mut().step_by(37) {
+        row[x] = format!("{:.6}", row[x].parse::<f64>().unwrap() + 0.05);
+        row[z] = format!("{:.6}", row[z].parse::<f64>().unwrap() - 0.03);
+    }
+    let thrown = (lift..rows.len() - 2).filter(|i| i % 37 == 0).count();
+    let dir = std::env::temp_dir().join(format!("limb-estimate-outliers-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("thrown.csv");
+    let body: Vec<String> = rows.iter().map(|row| row.join(",")).collect();
+    std::fs::write(&file, format!("{header}\n{}\n", body.join("\n"))).unwrap();
+    for method in ["auto", "online"] {
+        let clean = common::json_of(&limb(&["estimate", CASE3, "--method", method, "--json"]));
+        let json = common::json_of(&limb(&[
+            "estimate",
+            file.to_str().unwrap(),
+            "--method",
+            method,
+            "--json",
+        ]));
+        for key in ["l1", "l2"] {
+            let moved = (json[key].as_f64().unwrap() - clean[key].as_f64().unwrap()).abs();
+            assert!(moved < 0.1e-3, "{method} {key}: {moved} m");
+        }
+        assert_eq!(json["validated"], true, "{method}: {}", json["rejection"]);
+        assert_eq!(json["evidence"]["outliers"], thrown, "{method}");
+        assert_eq!(clean["evidence"]["outliers"], 0, "{method}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

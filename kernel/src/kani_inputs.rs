@@ -107,6 +107,7 @@ pub fn validated_arm() -> ValidatedArm {
             method_disagreement: Some(1e-4),
             forearm_samples: 1000,
             upper_arm_samples: 1000,
+            outliers: 0,
         },
     };
     let accepted = validate(

@@ -427,6 +427,7 @@ mod verification {
                 },
                 forearm_samples: 1000,
                 upper_arm_samples: 1000,
+                outliers: 0,
             },
         };
         let start = Point::new(any_or(0.0), any_or(0.0));

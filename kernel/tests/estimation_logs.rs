@@ -6,6 +6,7 @@ mod support {
 }
 
 use limb_kernel::estimation::online::{elbow_point, OnlineEstimator, OnlinePhase};
+use limb_kernel::estimation::outlier::OUTLIER_REACH;
 use limb_kernel::estimation::refine::{Progress, ITERATIONS, SAMPLES_PER_STEP};
 use limb_kernel::estimation::{estimate_arm, EstimateError, Method};
 use limb_kernel::estimation::{estimate_online, ArmEstimate};
@@ -262,7 +263,7 @@ fn replay_online(path: &[PathSample], mut each: impl FnMut(usize, &OnlineEstimat
 /// ends `DEPARTURE_WINDOW` samples before the sample that decides the
 /// departure (the window's first); the forearm's arc is the largest ψ of
 /// the phase above ψ at lift-off; once caught up, the upper arm's fit
-/// holds every sample from the split on. A sample with a non-finite pose
+/// holds every sample from the split on but the newest two. A sample with a non-finite pose
 /// is not recorded at all.
 #[test]
 fn the_online_split_and_forearm_arc_follow_their_definitions() {
@@ -293,12 +294,13 @@ fn the_online_split_and_forearm_arc_follow_their_definitions() {
         assert_eq!(online.split(), (lift, departed + 1 - DEPARTURE_WINDOW));
         let highest = (lift..=departed).map(psi).fold(f64::MIN, f64::max);
         assert_eq!(online.arcs().0, highest - psi(lift), "case {case}");
-        // Caught up: every sample from the split to the newest is in the
-        // upper arm's fit.
+        // Caught up: every sample from the split to the third newest (the
+        // newest two wait for the neighbours their outlier test needs) is
+        // in the upper arm's fit; these logs have no isolated outliers.
         let upper = online.upper_arm().expect("provisional upper arm");
         assert_eq!(
             upper.count,
-            log.path.len() - online.split().1,
+            log.path.len() - online.split().1 - OUTLIER_REACH,
             "case {case}"
         );
     }
@@ -447,4 +449,65 @@ fn skipped_samples_do_not_move_the_online_split() {
     });
     let departed = departed.expect("departure");
     assert_eq!(previous.split(), (lift, departed + 1 - DEPARTURE_WINDOW));
+}
+
+/// REQ-EST-005: isolated outliers (a sample thrown 5.8 cm off, on every
+/// 37th or every 11th sample) are left out of the fits and counted: on the
+/// six noisy logs the kernel's online estimate moves by less than 0.1 mm
+/// from its clean answer and is still validated (measured: at most
+/// 0.043 mm), and `Auto` on the labelled `none`, compliance and slip logs
+/// by less than 0.2 mm from its own clean answer (measured: at most
+/// 0.077 mm). Before the outlier test: `Auto` 33 mm off on the compliance
+/// log (its compliance went undetected) and 22 mm on the slip log; the
+/// online estimate 0.5-0.7 m off.
+#[test]
+fn req_est_005_isolated_outliers_are_left_out_and_counted() {
+    use limb_kernel::validate::{validate, ValidationLimits};
+    let thrown = |path: &[PathSample], every: usize| -> Vec<PathSample> {
+        let mut path = path.to_vec();
+        for sample in path.iter_mut().step_by(every) {
+            sample.pose.x += 0.05;
+            sample.pose.z -= 0.03;
+        }
+        path
+    };
+    let check = |file: &str, method: Method, bound: f64, validated: bool| {
+        let log = logs::read(file);
+        let clean = estimate_arm(&log.path, method).expect("clean");
+        for every in [37, 11] {
+            let path = thrown(&log.path, every);
+            let e = estimate_arm(&path, method).unwrap_or_else(|err| panic!("{file}: {err:?}"));
+            let moved = moved(&e, &clean);
+            assert!(moved < bound, "{file} {method:?} every {every}: {moved} m");
+            // Counted: the thrown samples of the two phases (from lift-off
+            // on), but the last two samples, which have no full window.
+            let lift = path
+                .iter()
+                .position(|s| s.pose.psi > LIFT_PSI)
+                .expect("lift");
+            let thrown = (lift..path.len() - OUTLIER_REACH)
+                .filter(|i| i % every == 0)
+                .count();
+            assert_eq!(
+                e.evidence.outliers, thrown,
+                "{file} {method:?} every {every}"
+            );
+            if validated {
+                let start = log.path[0].pose.point();
+                let verdict = validate(&e, start, &ValidationLimits::default());
+                assert!(verdict.is_ok(), "{file} every {every}: {verdict:?}");
+            }
+        }
+    };
+    for case in 1..=6 {
+        check(
+            &format!("noisy/case{case}.csv"),
+            Method::Online,
+            0.1e-3,
+            true,
+        );
+    }
+    for file in ["none", "grasp_compliance", "grasp_slip"] {
+        check(&format!("effects/{file}.csv"), Method::Auto, 0.2e-3, false);
+    }
 }

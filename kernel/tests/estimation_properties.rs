@@ -177,6 +177,7 @@ proptest! {
                 method_disagreement: disagreement,
                 forearm_samples: 100,
                 upper_arm_samples: 100,
+                outliers: 0,
             },
         };
         let limits = ValidationLimits::default();

@@ -61,6 +61,7 @@ fn estimate(
             method_disagreement: disagreement,
             forearm_samples: 100,
             upper_arm_samples: 100,
+            outliers: 0,
         },
     }
 }
@@ -110,6 +111,7 @@ fn req_val_001_a_consistent_estimate_is_accepted() {
             method_disagreement: Some(0.001),
             forearm_samples: 100,
             upper_arm_samples: 100,
+            outliers: 0,
         },
     };
     assert!(validate(&e, Point::new(0.0, 0.0), &ValidationLimits::default()).is_ok());

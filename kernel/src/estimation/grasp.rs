@@ -127,7 +127,13 @@ pub fn fit_forearm_pose(
     free: FreeCorrections,
 ) -> Result<ForearmPose, EstimateError> {
     let grasp = model.along_forearm(0.0);
-    let points = grasp.fit_points(path, range.clone());
+    // Isolated outliers are left out (`outlier.rs`): an unweighted first
+    // round and the plain RMS the compliance and slip decisions compare
+    // would follow them.
+    let indices = super::outlier::kept(path, range);
+    let points = indices
+        .clone()
+        .filter_map(|index| path.get(index).map(|sample| grasp.fit_point(index, sample)));
     if points.clone().take(3).count() < 3 {
         return Err(EstimateError::ForearmPhaseTooShort);
     }
@@ -138,7 +144,10 @@ pub fn fit_forearm_pose(
             correction: next.correction,
             ..grasp.along_forearm(next.forearm_length)
         };
-        let rms = rms_distance(elbow_path.points(path, range.clone()), next.elbow);
+        let elbow_points = indices
+            .clone()
+            .filter_map(|index| elbow_path.point_at(path, index));
+        let rms = rms_distance(elbow_points, next.elbow);
         if !rms.is_finite() {
             return Err(EstimateError::ForearmFit(CircleFitError::NonFinite));
         }

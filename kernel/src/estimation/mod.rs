@@ -27,6 +27,7 @@ mod grasp;
 mod hough;
 pub mod moments;
 pub mod online;
+pub mod outlier;
 mod phase;
 pub mod refine;
 
@@ -82,6 +83,10 @@ pub struct FitEvidence {
     pub forearm_samples: usize,
     /// Samples used in phase 2.
     pub upper_arm_samples: usize,
+    /// Samples of either phase left out of the fits as isolated outliers
+    /// ([`outlier`]); 0 for the methods that use every sample (the paper's
+    /// `Ls` and `Hough`).
+    pub outliers: usize,
 }
 
 /// An unvalidated arm estimate (frame S). Turned into a
@@ -229,9 +234,10 @@ impl PointModel {
         path.get(index).map(|sample| self.point(index, sample))
     }
 
-    /// Robust circle through the corrected points of `path[range]`: the
-    /// bounded Hough transform (chords) as a start that outliers and
-    /// corrupted stretches cannot pull, refined by the robust geometric fit.
+    /// Robust circle through the corrected points of `path[range]` that
+    /// are not isolated outliers ([`outlier`]): the bounded Hough transform
+    /// (chords) as a start that outliers and corrupted stretches cannot
+    /// pull, refined by the robust geometric fit.
     ///
     /// # Errors
     /// Either fit failed.
@@ -242,9 +248,14 @@ impl PointModel {
     ) -> Result<GeometricFit, CircleFitError> {
         let first = range.start;
         let start = hough_circle_chords(range.len(), |offset| {
-            self.point_at(path, first.checked_add(offset)?)
+            let index = first.checked_add(offset)?;
+            if outlier::is_isolated_outlier(path, index) {
+                return None;
+            }
+            self.point_at(path, index)
         })?;
-        fit_circle_geometric(self.points(path, range), start)
+        let kept = outlier::kept(path, range).filter_map(|index| self.point_at(path, index));
+        fit_circle_geometric(kept, start)
     }
 
     /// Corrected points of `path[range]` (empty where the range is out of
@@ -307,8 +318,17 @@ pub fn estimate_arm(path: &[PathSample], method: Method) -> Result<ArmEstimate, 
         }
     };
     let grasp = fits.elbow_path.along_forearm(0.0);
-    let forearm_points = || grasp.points(path, phases.forearm.clone());
-    let elbow_points = || fits.elbow_path.points(path, phases.upper_arm.clone());
+    // Auto leaves isolated outliers out of its fits, so its evidence is
+    // over the samples it kept; the paper's methods keep every sample.
+    let gated = method == Method::Auto;
+    let used = |range: Range<usize>| {
+        range.filter(move |&index| !(gated && outlier::is_isolated_outlier(path, index)))
+    };
+    let forearm_points = || used(phases.forearm.clone()).filter_map(|i| grasp.point_at(path, i));
+    let elbow_points =
+        || used(phases.upper_arm.clone()).filter_map(|i| fits.elbow_path.point_at(path, i));
+    let forearm_samples = used(phases.forearm.clone()).count();
+    let upper_arm_samples = used(phases.upper_arm.clone()).count();
     Ok(ArmEstimate {
         upper_arm_length: fits.upper_arm.radius,
         forearm_length: fits.forearm.radius,
@@ -321,8 +341,10 @@ pub fn estimate_arm(path: &[PathSample], method: Method) -> Result<ArmEstimate, 
             forearm_residual: fits.forearm.rms_residual(forearm_points()),
             upper_arm_residual: fits.upper_arm.rms_residual(elbow_points()),
             method_disagreement,
-            forearm_samples: phases.forearm.len(),
-            upper_arm_samples: phases.upper_arm.len(),
+            forearm_samples,
+            upper_arm_samples,
+            outliers: phases.forearm.len().saturating_sub(forearm_samples)
+                + phases.upper_arm.len().saturating_sub(upper_arm_samples),
         },
     })
 }

@@ -8,7 +8,9 @@
 //! 2. in the forearm phase (elbow resting on the table, the grasp point on
 //!    a circle about it), adds grasp points to running Kåsa moments
 //!    ([`CircleMoments`]) [`DEPARTURE_WINDOW`] samples late, so the circle
-//!    that judges a sample never contains it. Once the forearm has swept
+//!    that judges a sample never contains it, and leaves isolated outliers
+//!    out ([`super::outlier`]): an unweighted fit over a short arc follows
+//!    them out of all proportion. Once the forearm has swept
 //!    [`PROVISIONAL_ARC`] the moments give a provisional forearm (l2, resting
 //!    elbow, 1σ uncertainties). A sample whose radial residual exceeds the
 //!    departure tolerance is flagged; when [`DEPARTURE_PERCENT`] % of the
@@ -16,9 +18,11 @@
 //!    circle for good (the elbow has lifted), and the forearm phase ends
 //!    where that window starts;
 //! 3. in the upper-arm phase, adds the elbow point E = G + l2 (cos psi,
-//!    −sin psi) (eq. 19-21, l2 the provisional forearm at the split) to a
-//!    second set of moments; after [`PROVISIONAL_ARC`] about its centre they
-//!    give a provisional upper arm (l1, shoulder).
+//!    −sin psi) (eq. 19-21, l2 the provisional forearm at the split) of
+//!    each sample that is not an isolated outlier to a second set of
+//!    moments, [`OUTLIER_REACH`] samples late (the outlier test needs the
+//!    neighbours); after [`PROVISIONAL_ARC`] about its centre they give a
+//!    provisional upper arm (l1, shoulder).
 //!
 //! [`OnlineEstimator::joint_envelope`] turns the provisional model into the
 //! worst case of the person's joint angles at a pose: before the upper arm
@@ -32,6 +36,7 @@
 //! functions. No loop depends on the path length.
 
 use super::moments::{CircleMoments, MomentFit};
+use super::outlier::{is_isolated_outlier, OUTLIER_REACH};
 pub use super::phase::{
     DEPARTURE_PERCENT, DEPARTURE_TOLERANCE, DEPARTURE_WINDOW, LIFT_PSI, NOISE_MULTIPLE,
 };
@@ -194,7 +199,9 @@ impl OnlineEstimator {
         // The moments lag the newest sample by the departure window.
         if self.forearm_added + DEPARTURE_WINDOW <= index {
             if let Some(old) = path.get(self.forearm_added) {
-                self.forearm_moments.add(old.pose.point());
+                if !is_isolated_outlier(path, self.forearm_added) {
+                    self.forearm_moments.add(old.pose.point());
+                }
             }
             self.forearm_added += 1;
         }
@@ -235,7 +242,8 @@ impl OnlineEstimator {
     /// in soft-float `f64` on a Cortex-M7).
     fn catch_up(&mut self, path: &[PathSample], index: usize) {
         for _ in 0..CATCH_UP_PER_SAMPLE {
-            if self.upper_arm_added > index {
+            // A sample is judged once it has its neighbours.
+            if self.upper_arm_added + OUTLIER_REACH > index {
                 break;
             }
             self.add_elbow(path, self.upper_arm_added);
@@ -248,6 +256,10 @@ impl OnlineEstimator {
         let (Some(forearm), Some(sample)) = (self.forearm, path.get(index)) else {
             return;
         };
+        self.upper_arm_added = index + 1;
+        if is_isolated_outlier(path, index) {
+            return;
+        }
         let elbow = elbow_point(sample.pose, forearm.circle.radius);
         if self.upper_arm_moments.count() == 0 {
             self.first_elbow = elbow;
@@ -255,7 +267,6 @@ impl OnlineEstimator {
         if self.upper_arm_moments.add(elbow) {
             self.last_elbow = elbow;
         }
-        self.upper_arm_added = index + 1;
     }
 
     fn update_upper_arm(&mut self) {

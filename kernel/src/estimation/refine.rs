@@ -16,6 +16,9 @@
 //! 4. one evidence pass per phase: RMS geometric residual and the arc
 //!    between its first and last point.
 //!
+//! Every pass leaves out the samples that are isolated outliers
+//! ([`super::outlier`]); the evidence counts them.
+//!
 //! `method_disagreement` is the largest difference in l1 or l2 between the
 //! algebraic (Kåsa) and the geometric answer: on a circle both agree to
 //! noise, on a path that is no circle (a slip, a moving shoulder) they part.
@@ -28,6 +31,7 @@
 use super::circle::{Circle, CircleFitError};
 use super::moments::CircleMoments;
 use super::online::{angle_between, elbow_point};
+use super::outlier::is_isolated_outlier;
 use super::{ArmEstimate, EstimateError, FitEvidence, Method};
 use crate::geometry::Point;
 use crate::path::PathSample;
@@ -169,6 +173,8 @@ pub struct Refinement {
     upper_arm_kasa: Circle,
     upper_arm: Circle,
     forearm_evidence: (f64, f64),
+    /// Isolated outliers left out of (the forearm, the upper-arm) phase.
+    outliers: (usize, usize),
     outcome: Option<Result<ArmEstimate, EstimateError>>,
 }
 
@@ -189,6 +195,7 @@ impl Refinement {
             upper_arm_kasa: forearm_circle,
             upper_arm: forearm_circle,
             forearm_evidence: (0.0, 0.0),
+            outliers: (0, 0),
             outcome: None,
         }
     }
@@ -217,6 +224,15 @@ impl Refinement {
             let Some(sample) = path.get(index) else {
                 return self.finish(Err(EstimateError::PathTooLong));
             };
+            if is_isolated_outlier(path, index) {
+                // Counted once per phase, in its evidence pass.
+                match self.pass {
+                    Pass::ForearmEvidence => self.outliers.0 += 1,
+                    Pass::UpperArmEvidence => self.outliers.1 += 1,
+                    _ => {}
+                }
+                continue;
+            }
             match self.pass {
                 Pass::Forearm(_) => self
                     .sums
@@ -332,8 +348,13 @@ impl Refinement {
                 forearm_residual: self.forearm_evidence.1,
                 upper_arm_residual,
                 method_disagreement: Some(disagreement),
-                forearm_samples: span(self.forearm_range).len(),
-                upper_arm_samples: span(self.upper_arm_range).len(),
+                forearm_samples: span(self.forearm_range)
+                    .len()
+                    .saturating_sub(self.outliers.0),
+                upper_arm_samples: span(self.upper_arm_range)
+                    .len()
+                    .saturating_sub(self.outliers.1),
+                outliers: self.outliers.0 + self.outliers.1,
             },
         }
     }
