@@ -141,6 +141,35 @@ mod tests {
         assert!(!is_isolated_outlier(&inside, 10));
     }
 
+    /// The gates are strict: on a grasp at rest, a glitch exactly
+    /// [`OUTLIER_DISTANCE`] or exactly [`OUTLIER_PSI`] off (the median is
+    /// the resting pose, so the difference is exact) is not an outlier.
+    #[test]
+    fn a_glitch_exactly_at_a_gate_is_not_an_outlier() {
+        let at_rest = |glitch: Pose| -> GraspPath {
+            (0..9)
+                .map(|i| PathSample {
+                    time: i as f64 * 0.01,
+                    pose: if i == 4 { glitch } else { Pose::default() },
+                    wrench: Wrench::ZERO,
+                })
+                .collect()
+        };
+        for (at, beyond) in [
+            (
+                Pose::new(0.0, OUTLIER_DISTANCE, 0.0),
+                Pose::new(0.0, OUTLIER_DISTANCE * (1.0 + f64::EPSILON), 0.0),
+            ),
+            (
+                Pose::new(0.0, 0.0, OUTLIER_PSI),
+                Pose::new(0.0, 0.0, OUTLIER_PSI * (1.0 + f64::EPSILON)),
+            ),
+        ] {
+            assert!(!is_isolated_outlier(&at_rest(at), 4), "{at:?}");
+            assert!(is_isolated_outlier(&at_rest(beyond), 4), "{beyond:?}");
+        }
+    }
+
     /// The first and last two samples have no full window: never outliers.
     #[test]
     fn the_ends_of_a_path_are_not_judged() {
