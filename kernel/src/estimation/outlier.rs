@@ -44,9 +44,10 @@ pub const OUTLIER_PSI: f64 = 0.05;
 /// True when `path[index]` is an isolated outlier (module doc); false for
 /// an index without [`OUTLIER_REACH`] samples on each side.
 pub fn is_isolated_outlier(path: &[PathSample], index: usize) -> bool {
+    // Checked both ways: an index near `usize::MAX` has no window either.
     let Some(window) = index
         .checked_sub(OUTLIER_REACH)
-        .and_then(|first| path.get(first..first + OUTLIER_WINDOW))
+        .and_then(|first| path.get(first..first.checked_add(OUTLIER_WINDOW)?))
     else {
         return false;
     };
@@ -181,6 +182,7 @@ mod tests {
             }
         });
         assert!([0, 1, 38, 39].iter().all(|&i| !is_isolated_outlier(&p, i)));
+        assert!(!is_isolated_outlier(&p, usize::MAX));
     }
 }
 
