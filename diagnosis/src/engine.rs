@@ -6,7 +6,8 @@
 //! For a set of effects S with k fitted parameters, the fit minimises the
 //! sum of squared scaled residuals on the fit samples ([`crate::optimize`],
 //! bounded and deterministic; every point it costs is first refined by
-//! the model's own solve, [`Model::polish`], where it has one); the set is then judged only on held-out
+//! the model's own solve, [`Model::polish`], where it has one, and what
+//! that solve sets, [`Model::solves`], is not searched); the set is then judged only on held-out
 //! samples, by the **held-out information criterion** relative to the
 //! set it extends (S₀, the nominal sim at first):
 //!
@@ -326,8 +327,11 @@ fn units_of(model: &dyn Model, effects: &[Applied]) -> Vec<f64> {
 
 /// Minimises the fit samples' cost over the parameters of the effects
 /// `layout` from `starts` (unit coordinates); every point is refined by
-/// the model's own solve, where it has one. Returns the effects at the
-/// minimum and the evaluations spent.
+/// the model's own solve, where it has one. The parameters of candidates
+/// the model solves ([`Model::solves`]) are not searched: they keep the
+/// first start's values until the solve replaces them, and starts that
+/// differ only in them are one start. Returns the effects at the minimum
+/// and the evaluations spent.
 fn minimize_over(
     problem: &Problem,
     layout: &[usize],
@@ -335,15 +339,44 @@ fn minimize_over(
     options: &Options,
 ) -> (Vec<Applied>, usize) {
     let model = problem.fit.model;
+    let searched: Vec<bool> = layout
+        .iter()
+        .flat_map(|&c| {
+            let count = model.candidates()[c].parameters.len();
+            std::iter::repeat_n(!model.solves(c), count)
+        })
+        .collect();
+    let held = starts.first().cloned().unwrap_or_default();
+    let full = |units: &[f64]| -> Vec<f64> {
+        let mut searched_units = units.iter();
+        held.iter()
+            .zip(&searched)
+            .map(|(h, s)| match s {
+                true => searched_units.next().copied().unwrap_or(*h),
+                false => *h,
+            })
+            .collect()
+    };
+    let mut reduced: Vec<Vec<f64>> = Vec::with_capacity(starts.len());
+    for start in starts {
+        let point: Vec<f64> = start
+            .iter()
+            .zip(&searched)
+            .filter_map(|(u, s)| s.then_some(*u))
+            .collect();
+        if !reduced.contains(&point) {
+            reduced.push(point);
+        }
+    }
     let effects_for = |units: &[f64]| {
-        let effects = effects_at(model, layout, units);
+        let effects = effects_at(model, layout, &full(units));
         model.polish(&effects, &problem.fit.mask).unwrap_or(effects)
     };
     let cost = |units: &[f64]| match model.predict(&effects_for(units)) {
         Ok(predicted) => sum_of_squares(model, &predicted, &problem.fit.mask).0,
         Err(_) => f64::INFINITY,
     };
-    let minimum = minimize(cost, starts, options.budget);
+    let minimum = minimize(cost, &reduced, options.budget);
     (effects_for(&minimum.point), minimum.evaluations)
 }
 

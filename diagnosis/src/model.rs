@@ -209,6 +209,13 @@ pub trait Model: Sync {
     fn polish(&self, _effects: &[Applied], _mask: &[bool]) -> Option<Vec<Applied>> {
         None
     }
+    /// `true` when [`Model::polish`] solves every parameter of `candidate`
+    /// from the others whatever values it is handed: the optimiser then
+    /// leaves them out of its search (a direction along which the cost
+    /// cannot change only misleads a simplex). The default: `false`.
+    fn solves(&self, _candidate: usize) -> bool {
+        false
+    }
     /// For a model whose prediction is linearised in its base parameters
     /// around a reference (so [`Model::polish`] solves them by least
     /// squares): moves the reference to the base values in `effects` and

@@ -619,6 +619,12 @@ impl Model for ArmModel {
         Some(polished)
     }
 
+    /// The arm lengths: [`Model::polish`] solves them from the anchor,
+    /// whatever lengths it is handed.
+    fn solves(&self, candidate: usize) -> bool {
+        self.base() == Some(candidate)
+    }
+
     fn recentre(&self, applied: &[Applied]) -> bool {
         if self.lengths != Lengths::Fitted {
             return false;
