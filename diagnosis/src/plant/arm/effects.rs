@@ -8,8 +8,9 @@
 //! effect, so the arm the diagnosis reports is the arm corrected for the
 //! effects it found. The search starts at the kernel's own estimate on
 //! the same log ([`kernel_estimate`]: `Method::Auto`, what `limb
-//! estimate` reports) and spans [`LENGTH_REACH`] around it. Lengths that
-//! are given are held fixed.
+//! estimate` reports); the lengths range over [`LENGTH_RANGES`], widened
+//! to [`LENGTH_REACH`] around the estimate where that reaches beyond.
+//! Lengths that are given are held fixed.
 
 use crate::model::{Candidate, Parameter, Scale};
 use limb_kernel::estimation::{estimate_arm, Method};
@@ -85,24 +86,34 @@ pub fn candidates(duration: f64) -> Vec<Candidate> {
     ]
 }
 
-/// How far around the kernel's estimate the fitted lengths are searched
-/// [m] (the estimate is within 12 mm on every withheld-effect log; plain
-/// circle fits can be 91 mm off on a compliant grasp).
+/// How far around the kernel's estimate the fitted lengths reach at
+/// least [m] (the estimate is within 12 mm on every withheld-effect
+/// shared log; plain circle fits can be 91 mm off on a compliant grasp).
 pub const LENGTH_REACH: f64 = 0.1;
-/// Range searched for each length when the kernel cannot estimate the
-/// arm from the log [m]: l1, then l2.
-const LENGTH_RANGES: [[f64; 2]; 2] = [[0.15, 0.5], [0.08, 0.35]];
+/// Range of each length [m], l1 then l2, whatever the kernel estimates:
+/// the estimate is no bound on the arm. Under a very soft shoulder drift
+/// or a late grasp slip it put l1 11-19 cm long (blind self-check seed
+/// 271828, cases 9, 53, 150, 193), and a range of the estimate ± 10 cm
+/// held the fitted l1 at its lower end, 13-90 mm from the arm.
+pub const LENGTH_RANGES: [[f64; 2]; 2] = [[0.15, 0.5], [0.08, 0.35]];
 /// Shortest length searched [m].
 const SHORTEST: f64 = 0.05;
 /// Name of the base candidate: the arm's own lengths.
 pub const ARM: &str = "arm";
 
-/// The arm lengths' candidate (the engine's base): l1 and l2 searched
-/// around `start` (the kernel's estimate), or over [`LENGTH_RANGES`].
+/// The arm lengths' candidate (the engine's base): l1 and l2 over
+/// [`LENGTH_RANGES`], each widened to reach [`LENGTH_REACH`] around
+/// `start` (the kernel's estimate), never below [`SHORTEST`].
 pub fn arm_candidate(start: Option<(f64, f64)>) -> Candidate {
-    let range = |i: usize, centre: Option<f64>| match centre {
-        Some(c) => [(c - LENGTH_REACH).max(SHORTEST), c + LENGTH_REACH],
-        None => LENGTH_RANGES[i],
+    let range = |i: usize, centre: Option<f64>| {
+        let [low, high] = LENGTH_RANGES[i];
+        match centre {
+            Some(c) => [
+                low.min((c - LENGTH_REACH).max(SHORTEST)),
+                high.max(c + LENGTH_REACH),
+            ],
+            None => [low, high],
+        }
     };
     let [a, b] = range(0, start.map(|s| s.0));
     let [c, d] = range(1, start.map(|s| s.1));
