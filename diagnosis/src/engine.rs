@@ -351,9 +351,12 @@ fn minimize_over(
         let mut searched_units = units.iter();
         held.iter()
             .zip(&searched)
-            .map(|(h, s)| match s {
-                true => searched_units.next().copied().unwrap_or(*h),
-                false => *h,
+            .map(|(h, s)| {
+                if *s {
+                    searched_units.next().copied().unwrap_or(*h)
+                } else {
+                    *h
+                }
             })
             .collect()
     };

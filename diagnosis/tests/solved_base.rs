@@ -1,33 +1,31 @@
 //! A base the model solves itself is not searched: a toy plant whose
 //! nominal level is solved by least squares (as the arm plant solves its
-//! lengths, `Model::solves`) beside one candidate, a kink slope · max(t −
-//! at, 0). Searching the level as well gives the simplex directions along
-//! which the cost cannot change; on the arm plant that stopped slips in
-//! mid-lift at half their shift (`arm_slip.rs`).
+//! lengths, `Model::solves`). Searching the level as well gives the
+//! simplex directions along which the cost cannot change; on the arm
+//! plant that stopped slips in mid-lift at half their shift
+//! (`arm_slip.rs`).
 
 use limb_diagnosis::model::{grid, Applied, Candidate, Data, Hints, Parameter, Series, Signal};
 use limb_diagnosis::{select, HoldOut, Model, ModelError, Options, Problem};
 use limb_sim::noise::Gaussian;
 
-/// The base candidate: the nominal level.
+/// The base candidate, the only one: the nominal level.
 const LEVEL: usize = 0;
-/// The kink candidate: (slope, at).
-const KINK: usize = 1;
 
-struct Kinked {
+struct Level {
     data: Data,
     solves: bool,
 }
 
-impl Kinked {
-    /// Unit noise over sin t + `level` + `slope` · max(t − `at`, 0),
-    /// t in [0, 10) s.
-    fn new(level: f64, slope: f64, at: f64, seed: u64, solves: bool) -> Self {
+impl Level {
+    /// Unit noise over sin t + `level`, t in [0, 10) s; `solves`: what
+    /// [`Model::solves`] says of the level.
+    fn new(level: f64, seed: u64, solves: bool) -> Self {
         let times: Vec<f64> = (0..1000).map(|i| f64::from(i) * 0.01).collect();
         let mut noise = Gaussian::new(seed);
         let mut observed = Series::with_capacity(1, times.len());
         for t in &times {
-            let y = t.sin() + level + slope * (t - at).max(0.0) + noise.sample(1.0);
+            let y = t.sin() + level + noise.sample(1.0);
             observed.push(&[y]).unwrap();
         }
         Self {
@@ -39,36 +37,17 @@ impl Kinked {
                 scales: vec![1.0],
                 times,
                 observed,
-                candidates: vec![
-                    Candidate {
-                        name: "level",
-                        parameters: vec![Parameter::new("value", "1", -10.0, 10.0, "level")],
-                    },
-                    Candidate {
-                        name: "kink",
-                        parameters: vec![
-                            Parameter::new("slope", "1/s", -2.0, 2.0, "slope after"),
-                            Parameter::new("at", "s", 0.0, 10.0, "where"),
-                        ],
-                    },
-                ],
+                candidates: vec![Candidate {
+                    name: "level",
+                    parameters: vec![Parameter::new("value", "1", -10.0, 10.0, "level")],
+                }],
             },
             solves,
         }
     }
-
-    /// The prediction less the level.
-    fn shape(&self, effects: &[Applied], t: f64) -> f64 {
-        let kink: f64 = effects
-            .iter()
-            .filter(|a| a.candidate == KINK)
-            .map(|a| a.values[0] * (t - a.values[1]).max(0.0))
-            .sum();
-        t.sin() + kink
-    }
 }
 
-impl Model for Kinked {
+impl Model for Level {
     fn data(&self) -> &Data {
         &self.data
     }
@@ -89,30 +68,23 @@ impl Model for Kinked {
             .sum();
         let mut out = Series::with_capacity(1, self.times().len());
         for t in self.times() {
-            out.push(&[level + self.shape(effects, *t)])?;
+            out.push(&[level + t.sin()])?;
         }
         Ok(out)
     }
-    /// The level is the mean of what the rest leaves on the masked samples.
-    fn polish(&self, effects: &[Applied], mask: &[bool]) -> Option<Vec<Applied>> {
+    /// The level is the mean of observed − sin t on the masked samples.
+    fn polish(&self, _effects: &[Applied], mask: &[bool]) -> Option<Vec<Applied>> {
         let (mut sum, mut count) = (0.0, 0.0);
         for (i, t) in self.times().iter().enumerate() {
             if mask[i] {
-                sum += self.data.observed.row(i)[0] - self.shape(effects, *t);
+                sum += self.data.observed.row(i)[0] - t.sin();
                 count += 1.0;
             }
         }
-        let level = Applied {
+        Some(vec![Applied {
             candidate: LEVEL,
             values: vec![sum / count],
-        };
-        let mut polished: Vec<Applied> = effects
-            .iter()
-            .filter(|a| a.candidate != LEVEL)
-            .cloned()
-            .collect();
-        polished.insert(0, level);
-        Some(polished)
+        }])
     }
     fn solves(&self, candidate: usize) -> bool {
         self.solves && candidate == LEVEL
@@ -127,13 +99,13 @@ fn a_solved_base_alone_costs_one_evaluation() {
     // The nominal fit of the level has nothing to search: one cost
     // evaluation (and the engine's own nominal prediction), where a
     // searched level spends the start grid and the simplex's iterations.
-    let solved = Kinked::new(2.0, 0.0, 5.0, 4, true);
-    let searched = Kinked::new(2.0, 0.0, 5.0, 4, false);
+    let solved = Level::new(2.0, 4, true);
+    let searched = Level::new(2.0, 4, false);
     let options = Options {
         max_effects: 0,
         ..Options::default()
     };
-    let run = |toy: &Kinked| {
+    let run = |toy: &Level| {
         let problem = Problem::split(toy, HoldOut::default()).unwrap();
         select(&problem, &options, &|_| {}).unwrap()
     };
