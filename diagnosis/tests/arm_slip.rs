@@ -2,7 +2,10 @@
 //! slip is named with its shift and the corrected arm is the arm before
 //! it. Two logs of the blind self-check on seed 90210 (cases 85 and 94)
 //! that the searched arm lengths (`Model::solves`, `solved_base.rs`)
-//! stopped at about half the shift: arm 6 and 16 mm off.
+//! stopped at about half the shift: arm 6 and 16 mm off. And a 3 cm slip
+//! at 6.9 s (seed 161803, case 48) whose shift and forearm trade along a
+//! long valley that the joint refits, three rounds at most until
+//! `REFITS` became 10, left 3.4 mm short.
 
 use limb_diagnosis::plant::arm::blind::simulate;
 use limb_diagnosis::plant::arm::{diagnose, Lengths};
@@ -23,7 +26,7 @@ fn slip_is_undone(l1: f64, l2: f64, seed: u64, shift: f64, at: f64) {
         "{fitted:?} for shift {shift} m at {at} s"
     );
     let error = (d.arm.l1 - l1).abs().max((d.arm.l2 - l2).abs());
-    assert!(error < 0.003, "arm {:?} for ({l1}, {l2}): {error} m", d.arm);
+    assert!(error < 0.001, "arm {:?} for ({l1}, {l2}): {error} m", d.arm);
 }
 
 #[test]
@@ -45,5 +48,16 @@ fn a_slip_at_the_end_of_the_lift_is_undone_in_the_arm() {
         740_862_598_799_243,
         0.032_044_022_138_846_72,
         8.452_630_152_892_748,
+    );
+}
+
+#[test]
+fn a_large_slip_early_in_the_lift_is_undone_in_the_arm() {
+    slip_is_undone(
+        0.316_368_887_873_247_6,
+        0.182_371_540_461_901_77,
+        166_380_563_600_233,
+        -0.032_332_188_284_851_245,
+        6.916_440_971_929_377,
     );
 }
