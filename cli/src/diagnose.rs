@@ -280,7 +280,7 @@ fn confusion(s: &Summary) -> String {
          single-effect and clean logs; rows: withheld effect; columns: first effect added\n{:>17}",
         s.logs, s.seed, ""
     );
-    for name in &s.classes {
+    for name in &s.answers {
         text += &format!(" {:>6}", short(name));
     }
     text += "\n";
@@ -295,8 +295,8 @@ fn confusion(s: &Summary) -> String {
         "single-effect and clean logs: {}, top-1 accuracy {:.1} %\n\
          median held-out shrink when right {:.1} %\n\
          median relative parameter error when right {:.1} %\n\
-         none answered for effects > 2x noise: {} of {}\n\
-         none answered for effects > 2x noise once the arm absorbs what it can: {} of {}\n\
+         none answered for effects > 2x noise with the true arm: {} of {}\n\
+         none answered for effects > 2x noise once the arm absorbs what it can (the bar): {} of {}\n\
          clean logs accused: {} of {}\n\
          corrected arm within 3 mm: {} of {} single-effect logs\n\
          pairs with both effects named: {} of {}\n",

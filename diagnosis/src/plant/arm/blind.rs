@@ -21,7 +21,11 @@
 //! **identifiable size**: the same measure of what the effect leaves once
 //! the arm lengths absorb what they can (the noise-free log with the
 //! effect less the nominal sim at the lengths that fit it best). The
-//! check counts `none` answers both ways; the issue's bar is the first.
+//! check counts `none` answers both ways. The issue's bar ("`none`
+//! never for an effect above twice the noise floor", lengths not given)
+//! is counted by the identifiable size: for a diagnosis not told the arm,
+//! an effect is what no arm explains (diagnosis README, "How the `none`
+//! bar is counted").
 //!
 //! # Parameter ranges
 //! [`RANGES`] spans roughly a quarter to four times the magnitude of the
@@ -30,7 +34,7 @@
 //! the logarithm where the range spans a decade or more.
 
 use super::model::{ArmModel, LengthSolve, Lengths};
-use super::outcome::{diagnose, DiagnoseError};
+use super::outcome::{diagnose, DiagnoseError, UNEXPLAINED};
 use crate::engine::{parallel_map, Progress};
 use crate::model::{Applied, Model, Series};
 use limb_sim::effects::{Effect, Effects, CATALOGUE};
@@ -86,6 +90,32 @@ pub fn classes() -> Vec<&'static str> {
         .collect()
 }
 
+/// The answers a diagnosis gives: the classes, then [`UNEXPLAINED`].
+pub fn answers() -> Vec<&'static str> {
+    let mut answers = classes();
+    answers.push(UNEXPLAINED);
+    answers
+}
+
+/// confusion[truth][answer] over single-effect and clean logs, rows in
+/// [`classes`] order, columns in [`answers`] order (an answer outside
+/// them, which the diagnosis never gives, counts as unexplained).
+fn confusion(singles: &[&Case]) -> Vec<Vec<usize>> {
+    let (rows, columns) = (classes(), answers());
+    let mut confusion = vec![vec![0usize; columns.len()]; rows.len()];
+    for c in singles {
+        let row = rows.iter().position(|n| Some(*n) == c.class());
+        let column = columns
+            .iter()
+            .position(|n| *n == c.answer)
+            .unwrap_or(columns.len() - 1);
+        if let Some(row) = row {
+            confusion[row][column] += 1;
+        }
+    }
+    confusion
+}
+
 /// One log of the check.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Case {
@@ -136,8 +166,11 @@ pub struct Summary {
     pub logs: usize,
     /// Seed of the run.
     pub seed: u64,
-    /// Class names, the row and column order of `confusion`.
+    /// Class names, the row order of `confusion`.
     pub classes: Vec<String>,
+    /// The answers, the column order of `confusion`: the classes, then
+    /// [`UNEXPLAINED`].
+    pub answers: Vec<String>,
     /// confusion[truth][answer] counts over single-effect and clean logs.
     pub confusion: Vec<Vec<usize>>,
     /// Single-effect and clean logs.
@@ -467,17 +500,8 @@ pub fn run(
     })
     .into_iter()
     .collect::<Result<Vec<Case>, DiagnoseError>>()?;
-    let position = |name: &str| {
-        names
-            .iter()
-            .position(|n| *n == name)
-            .unwrap_or(names.len() - 1)
-    };
-    let mut confusion = vec![vec![0usize; names.len()]; names.len()];
     let singles: Vec<&Case> = cases.iter().filter(|c| c.class().is_some()).collect();
-    for c in &singles {
-        confusion[position(c.class().unwrap_or("none"))][position(&c.answer)] += 1;
-    }
+    let confusion = confusion(&singles);
     let correct = singles
         .iter()
         .filter(|c| c.class() == Some(&c.answer))
@@ -499,6 +523,7 @@ pub fn run(
         logs,
         seed,
         classes: names.iter().map(|n| n.to_string()).collect(),
+        answers: answers().iter().map(|n| n.to_string()).collect(),
         confusion,
         singles: singles.len(),
         top1_accuracy: correct as f64 / singles.len().max(1) as f64,
@@ -526,4 +551,49 @@ pub fn run(
             .count(),
         cases,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{answers, classes, confusion, Case};
+
+    fn case(truth: &[&str], answer: &str) -> Case {
+        Case {
+            index: 0,
+            truth: truth.iter().map(|t| t.to_string()).collect(),
+            params: Vec::new(),
+            arm: (0.3, 0.2),
+            seed: 0,
+            size: 0.0,
+            identifiable_size: 0.0,
+            answer: answer.to_string(),
+            added: Vec::new(),
+            shrink: 0.0,
+            arm_error: 0.0,
+            parameter_errors: Vec::new(),
+        }
+    }
+
+    /// `unexplained` is a column of its own, not counted as `none`; a
+    /// pair has no row.
+    #[test]
+    fn unexplained_answers_are_not_counted_as_none() {
+        let cases = [
+            case(&["grasp_slip"], "unexplained"),
+            case(&["grasp_slip"], "none"),
+            case(&[], "none"),
+            case(&["backlash", "latency"], "backlash"),
+        ];
+        let singles: Vec<&Case> = cases.iter().collect();
+        let table = confusion(&singles);
+        let (rows, columns) = (classes(), answers());
+        let at = |name: &str, list: &[&str]| list.iter().position(|n| *n == name).unwrap();
+        assert_eq!(table.len(), rows.len());
+        assert!(table.iter().all(|row| row.len() == columns.len()));
+        let slip = &table[at("grasp_slip", &rows)];
+        assert_eq!(slip[at("unexplained", &columns)], 1);
+        assert_eq!(slip[at("none", &columns)], 1);
+        assert_eq!(table[at("none", &rows)][at("none", &columns)], 1);
+        assert_eq!(table.iter().flatten().sum::<usize>(), 3);
+    }
 }
