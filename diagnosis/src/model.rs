@@ -220,8 +220,8 @@ pub trait Model: Sync {
     /// around a reference (so [`Model::polish`] solves them by least
     /// squares): moves the reference to the base values in `effects`,
     /// linearising there the prediction with the other effects in
-    /// `effects`, and returns `true`. The default (no linearisation) does nothing and
-    /// returns `false`. The engine calls it between selection steps only,
+    /// `effects`, and returns `true`. The default (no linearisation) does
+    /// nothing and returns `false`. The engine calls it between selection steps only,
     /// never while candidates are fitted side by side.
     fn recentre(&self, _effects: &[Applied]) -> bool {
         false

@@ -5,8 +5,9 @@
 //! 90 mm from the arm, with a spurious mass mismatch and slip after the
 //! drift.
 
-use limb_diagnosis::plant::arm::blind::simulate;
-use limb_diagnosis::plant::arm::{diagnose, Lengths};
+mod common;
+
+use common::{arm_error, diagnosed};
 use limb_sim::effects::Effect;
 
 #[test]
@@ -17,10 +18,7 @@ fn a_soft_shoulder_drift_far_from_the_kernels_estimate_is_corrected() {
         312.010_311_370_472_8,
     );
     let drift = Effect::new("shoulder_drift", &[("k", k)]).unwrap();
-    let records = simulate(l1, l2, 8_252_959_674_367, &[drift]).unwrap();
-    let d = diagnose(Lengths::Fitted, &records, 2, &|_| {})
-        .unwrap()
-        .diagnosis;
+    let d = diagnosed(l1, l2, 8_252_959_674_367, &[drift]);
     assert!(
         (d.arm.estimate.unwrap()[0] - l1).abs() > 0.15,
         "the kernel's estimate is no longer far off: {:?}",
@@ -29,6 +27,6 @@ fn a_soft_shoulder_drift_far_from_the_kernels_estimate_is_corrected() {
     assert_eq!(d.effect, "shoulder_drift", "{:?}", d.effects);
     let fitted = d.effects[0].params["k"];
     assert!(((fitted - k) / k).abs() < 0.1, "k {fitted} for {k}");
-    let error = (d.arm.l1 - l1).abs().max((d.arm.l2 - l2).abs());
+    let error = arm_error(&d, l1, l2);
     assert!(error < 0.003, "arm {:?} for ({l1}, {l2}): {error} m", d.arm);
 }

@@ -7,25 +7,23 @@
 //! long valley that the joint refits, three rounds at most until
 //! `REFITS` became 10, left 3.4 mm short.
 
-use limb_diagnosis::plant::arm::blind::simulate;
-use limb_diagnosis::plant::arm::{diagnose, Lengths};
+mod common;
+
+use common::{arm_error, diagnosed};
 use limb_sim::effects::Effect;
 
 /// Diagnoses the reference plant of arm (`l1`, `l2`) [m] with noise seed
 /// `seed` and a slip of `shift` [m] at `at` [s]; checks the answer.
 fn slip_is_undone(l1: f64, l2: f64, seed: u64, shift: f64, at: f64) {
     let slip = Effect::new("grasp_slip", &[("shift", shift), ("at", at)]).unwrap();
-    let records = simulate(l1, l2, seed, &[slip]).unwrap();
-    let d = diagnose(Lengths::Fitted, &records, 2, &|_| {})
-        .unwrap()
-        .diagnosis;
+    let d = diagnosed(l1, l2, seed, &[slip]);
     assert_eq!(d.effect, "grasp_slip", "{:?}", d.effects);
     let fitted = &d.effects[0].params;
     assert!(
         ((fitted["shift"] - shift) / shift).abs() < 0.1 && (fitted["at"] - at).abs() < 0.05,
         "{fitted:?} for shift {shift} m at {at} s"
     );
-    let error = (d.arm.l1 - l1).abs().max((d.arm.l2 - l2).abs());
+    let error = arm_error(&d, l1, l2);
     assert!(error < 0.001, "arm {:?} for ({l1}, {l2}): {error} m", d.arm);
 }
 

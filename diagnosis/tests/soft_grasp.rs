@@ -7,8 +7,9 @@
 //! added for what was left (blind self-check seed 161803, log 5: the
 //! kernel refused the arm, so the fit starts 4-5 cm from it).
 
-use limb_diagnosis::plant::arm::blind::simulate;
-use limb_diagnosis::plant::arm::{diagnose, Lengths};
+mod common;
+
+use common::{arm_error, diagnosed};
 use limb_sim::effects::Effect;
 
 #[test]
@@ -19,14 +20,11 @@ fn a_very_soft_grasp_is_one_effect_with_the_arm_corrected() {
         205.599_734_188_847_7,
     );
     let compliance = Effect::new("grasp_compliance", &[("k", k)]).unwrap();
-    let records = simulate(l1, l2, 465_097_474_080_156, &[compliance]).unwrap();
-    let d = diagnose(Lengths::Fitted, &records, 2, &|_| {})
-        .unwrap()
-        .diagnosis;
+    let d = diagnosed(l1, l2, 465_097_474_080_156, &[compliance]);
     let names: Vec<&str> = d.effects.iter().map(|e| e.effect.as_str()).collect();
     assert_eq!(names, ["grasp_compliance"], "{:?}", d.effects);
     let fitted = d.effects[0].params["k"];
     assert!(((fitted - k) / k).abs() < 0.01, "k {fitted} for {k}");
-    let error = (d.arm.l1 - l1).abs().max((d.arm.l2 - l2).abs());
+    let error = arm_error(&d, l1, l2);
     assert!(error < 0.001, "arm {:?} for ({l1}, {l2}): {error} m", d.arm);
 }

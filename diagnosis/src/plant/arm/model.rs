@@ -648,11 +648,9 @@ impl Model for ArmModel {
             return false;
         }
         let (arm, effects) = self.arm_of(applied);
-        let same = self.current_linearisation().is_some_and(|l| {
-            l.reference == arm
-                && l.effects.len() == effects.len()
-                && l.effects.iter().zip(&effects).all(|(a, b)| a == *b)
-        });
+        let same = self
+            .current_linearisation()
+            .is_some_and(|l| l.reference == arm && l.effects.iter().eq(effects.iter().copied()));
         same || self.linearise(arm, &effects).is_ok()
     }
 
