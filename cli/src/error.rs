@@ -3,6 +3,8 @@
 //! * [`CliError::BadInput`] → exit 2: unreadable file, malformed CSV, missing
 //!   column, non-finite number, non-increasing time, an invalid flag value.
 //! * [`CliError::Internal`] → exit 1: anything that is our fault.
+//! * [`CliError::RobotFailure`] → exit 1: the robot (an external plant)
+//!   broke its protocol or failed; the JSON on stdout says where.
 //! * [`CliError::SafetyStop`] → exit 3: a device session ended in a safe
 //!   stop (the safety function worked; the JSON on stdout says why).
 //!
@@ -18,6 +20,9 @@ pub enum CliError {
     /// Limb itself failed (exit code 1).
     #[error("internal error: {0}")]
     Internal(String),
+    /// The robot failed mid-session (exit code 1).
+    #[error("robot failure: {0}")]
+    RobotFailure(String),
     /// A device session ended in a safe stop (exit code 3).
     #[error("safe stop: {0}")]
     SafetyStop(String),
@@ -28,7 +33,7 @@ impl CliError {
     pub fn exit_code(&self) -> i32 {
         match self {
             CliError::BadInput(_) => 2,
-            CliError::Internal(_) => 1,
+            CliError::Internal(_) | CliError::RobotFailure(_) => 1,
             CliError::SafetyStop(_) => 3,
         }
     }

@@ -8,6 +8,7 @@ mod diagnose;
 mod diagnose_drive;
 mod error;
 mod estimate;
+mod external;
 mod kuka;
 mod population;
 mod run;

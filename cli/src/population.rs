@@ -156,7 +156,7 @@ fn run_arm(l1: f64, l2: f64, seed: u64, config: &KernelConfig) -> Result<ArmOutc
         error: report
             .model
             .as_ref()
-            .map(|m| [m.error_l1.abs(), m.error_l2.abs()]),
+            .and_then(|m| Some([m.error_l1?.abs(), m.error_l2?.abs()])),
         refusal,
         estimate_duration,
         completed: report.completed && report.final_state == StateKind::Validated,

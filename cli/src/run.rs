@@ -57,7 +57,7 @@ impl<P: ClosedLoopPlant + ?Sized> ClosedLoopPlant for &mut P {
     }
 }
 
-/// Ground truth of the plant's arm.
+/// Ground truth of the reference plant's arm.
 #[derive(Clone, Copy, Debug, Serialize)]
 pub struct Truth {
     /// Upper-arm length [m].
@@ -68,6 +68,51 @@ pub struct Truth {
     pub elbow: [f64; 2],
     /// Shoulder [m].
     pub shoulder: [f64; 2],
+}
+
+/// The truth a session's report compares the model with: what the plant
+/// gives at the session's start, each absent when it gives none (an
+/// external plant may give any of them or none).
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct TruthReport {
+    /// Upper-arm length [m] (an anatomical arm: glenohumeral centre to
+    /// elbow centre).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub l1: Option<f64>,
+    /// Forearm length, elbow centre to grasp [m].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub l2: Option<f64>,
+    /// Elbow at t = 0, frame S [m].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub elbow: Option<[f64; 2]>,
+    /// Shoulder at t = 0, frame S [m].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub shoulder: Option<[f64; 2]>,
+}
+
+impl From<Truth> for TruthReport {
+    fn from(t: Truth) -> Self {
+        Self {
+            l1: Some(t.l1),
+            l2: Some(t.l2),
+            elbow: Some(t.elbow),
+            shoulder: Some(t.shoulder),
+        }
+    }
+}
+
+/// What a session's runner reads off its robot beyond the frames.
+pub trait TrueJoints {
+    /// The person's true joint angles now [rad] (shoulder elevation, elbow
+    /// flexion; hyperextension is a negative flexion), when the robot
+    /// knows them.
+    fn true_joints(&self) -> Option<[f64; 2]>;
+}
+
+impl<P: ClosedLoopPlant> TrueJoints for ReferenceRobot<P> {
+    fn true_joints(&self) -> Option<[f64; 2]> {
+        Some(self.plant().joints())
+    }
 }
 
 /// One line of the session's record.
@@ -94,12 +139,18 @@ pub struct ModelReport {
     pub shoulder: [f64; 2],
     /// Fitted elbow at t = 0 [m].
     pub elbow: [f64; 2],
-    /// Errors: l1, l2 and shoulder distance [m].
-    pub error_l1: f64,
-    /// Error of l2 [m].
-    pub error_l2: f64,
-    /// Distance between fitted and true shoulder [m].
-    pub error_shoulder: f64,
+    /// Error of l1 against the truth [m], when the truth gives l1.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error_l1: Option<f64>,
+    /// Error of l2 [m], when the truth gives l2.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error_l2: Option<f64>,
+    /// Distance between fitted and true shoulder [m], when given.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error_shoulder: Option<f64>,
+    /// Distance between fitted and true elbow at t = 0 [m], when given.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error_elbow: Option<f64>,
 }
 
 /// Wall time of every `Kernel::step` of the session [s].
@@ -133,7 +184,7 @@ pub struct SessionReport {
     /// Stops caused by a monitor, in words.
     pub monitor_events: Vec<Line>,
     /// The plant's truth.
-    pub truth: Truth,
+    pub truth: TruthReport,
     /// The validated model, when one was made.
     pub model: Option<ModelReport>,
     /// State at the end.
@@ -148,6 +199,8 @@ pub struct SessionReport {
     pub step_time: StepTime,
     /// Joint extremes per state (lower-case state name).
     pub joint_extremes: BTreeMap<String, JointExtremes>,
+    /// Largest measured interaction force |(fx, fz)| over the session [N].
+    pub max_force_n: f64,
     /// FNV-1a hash of every command issued, hex (`limb_session::digest::CommandHash`).
     pub command_hash: String,
     /// The session in the canonical text of `--digest`.
@@ -164,23 +217,33 @@ struct Recorder {
     started: Option<Instant>,
     durations: Vec<(f64, StateKind)>,
     joint_extremes: BTreeMap<String, JointExtremes>,
+    max_force: f64,
+    last_now: f64,
 }
 
-impl<P: ClosedLoopPlant> Observer<ReferenceRobot<P>> for Recorder {
-    fn before_step(&mut self, _: &ReferenceRobot<P>, _: &Frame, _: StateKind) {
+impl<R: TrueJoints + ?Sized> Observer<R> for Recorder {
+    fn before_step(&mut self, _: &R, _: &Frame, _: StateKind) {
         self.started = Some(Instant::now());
     }
 
-    fn after_step(&mut self, robot: &ReferenceRobot<P>, _: &Frame, state: StateKind, _: &Command) {
+    fn after_step(&mut self, robot: &R, frame: &Frame, state: StateKind, _: &Command) {
         let elapsed = self.started.map_or(0.0, |s| s.elapsed().as_secs_f64());
         self.durations.push((elapsed, state));
-        let [q1, q2] = robot.plant().joints();
+        let w = &frame.sample.wrench;
+        self.max_force = self.max_force.max(w.fx.hypot(w.fz));
+        let Some([q1, q2]) = robot.true_joints() else {
+            return;
+        };
         let extremes = self
             .joint_extremes
             .entry(format!("{state:?}").to_lowercase())
             .or_default();
         extremes.max_hyperextension = extremes.max_hyperextension.max(-q2);
         extremes.max_shoulder_elevation = extremes.max_shoulder_elevation.max(q1);
+    }
+
+    fn stepped(&mut self, step: &limb_session::Step<'_>) {
+        self.last_now = step.now;
     }
 
     fn event(&mut self, event: &TraceEvent) {
@@ -210,19 +273,35 @@ pub fn run_session(
     plan: &SessionPlan,
     log: Option<&mut Log>,
 ) -> SessionReport {
-    let truth = plant.arm_truth();
+    let truth = TruthReport::from(plant.arm_truth());
     let mut robot = ReferenceRobot::new(plant, plan.rate, plan.timeout);
+    let (report, _) = session(kernel, &mut robot, plan, log, |_| truth);
+    report
+}
+
+/// Runs one session of `kernel` on `robot` under the scripted operator
+/// following `plan`, writing the session log to `log` when given; `truth`
+/// reads the truth off the robot once the session is over. Returns the
+/// report and the kernel time of the last step.
+pub fn session<R>(
+    kernel: &mut Kernel,
+    robot: &mut R,
+    plan: &SessionPlan,
+    log: Option<&mut Log>,
+    truth: impl FnOnce(&R) -> TruthReport,
+) -> (SessionReport, f64)
+where
+    R: limb_session::Robot<Error = core::convert::Infallible>
+        + TrueJoints
+        + limb_session::log::Logged,
+{
     let mut observers = (Recorder::default(), log);
-    let Ok(outcome) = limb_session::run(
-        kernel,
-        &mut robot,
-        &mut Operator::new(*plan),
-        &mut observers,
-    );
+    let Ok(outcome) = limb_session::run(kernel, robot, &mut Operator::new(*plan), &mut observers);
     let (mut recorder, _) = observers;
+    let truth = truth(robot);
     let mut digest = recorder.digest;
     digest.push_str(&Digest(&outcome).to_string());
-    SessionReport {
+    let report = SessionReport {
         events: recorder.events,
         monitor_events: recorder.monitor_events,
         truth,
@@ -233,9 +312,21 @@ pub fn run_session(
         steps: outcome.steps,
         step_time: step_time(&mut recorder.durations),
         joint_extremes: recorder.joint_extremes,
+        max_force_n: recorder.max_force,
         command_hash: format!("{:016x}", outcome.command_hash),
         digest,
-    }
+    };
+    (report, recorder.last_now)
+}
+
+/// Records `event` in `report` as the session's recorder would have (for
+/// the events a runner causes after the loop, e.g. the stop that ends a
+/// robot failure).
+pub fn record_event(report: &mut SessionReport, event: &TraceEvent) {
+    let mut recorder = Recorder::default();
+    Observer::<ReferenceRobot<ReferencePlant>>::event(&mut recorder, event);
+    report.events.append(&mut recorder.events);
+    report.monitor_events.append(&mut recorder.monitor_events);
 }
 
 /// Median, 99.9th percentile and maximum of the step `durations`, with the
@@ -257,17 +348,19 @@ fn step_time(durations: &mut [(f64, StateKind)]) -> StepTime {
     }
 }
 
-fn model_report(model: &FittedModel, truth: &Truth) -> ModelReport {
+fn model_report(model: &FittedModel, truth: &TruthReport) -> ModelReport {
+    let off = |fitted: Point, truth: Option<[f64; 2]>| {
+        truth.map(|[x, z]| fitted.distance(Point::new(x, z)))
+    };
     ModelReport {
         l1: model.upper_arm_length,
         l2: model.forearm_length,
         shoulder: [model.shoulder.x, model.shoulder.z],
         elbow: [model.elbow.x, model.elbow.z],
-        error_l1: model.upper_arm_length - truth.l1,
-        error_l2: model.forearm_length - truth.l2,
-        error_shoulder: model
-            .shoulder
-            .distance(Point::new(truth.shoulder[0], truth.shoulder[1])),
+        error_l1: truth.l1.map(|l1| model.upper_arm_length - l1),
+        error_l2: truth.l2.map(|l2| model.forearm_length - l2),
+        error_shoulder: off(model.shoulder, truth.shoulder),
+        error_elbow: off(model.elbow, truth.elbow),
     }
 }
 
@@ -281,22 +374,33 @@ pub fn human(report: &SessionReport, header: &str) -> String {
     }
     let t = &report.truth;
     let _ = match &report.model {
-        Some(m) => writeln!(
-            out,
-            "model: l1 {:.4} m (truth {:.4}, {:+.2} mm)  l2 {:.4} m (truth {:.4}, {:+.2} mm)  \
-             shoulder ({:.4}, {:.4}) m (truth ({:.4}, {:.4}), {:.2} mm off)",
-            m.l1,
-            t.l1,
-            m.error_l1 * 1e3,
-            m.l2,
-            t.l2,
-            m.error_l2 * 1e3,
-            m.shoulder[0],
-            m.shoulder[1],
-            t.shoulder[0],
-            t.shoulder[1],
-            m.error_shoulder * 1e3
-        ),
+        Some(m) => {
+            let length =
+                |name: &str, fitted: f64, truth: Option<f64>, error: Option<f64>| match truth
+                    .zip(error)
+                {
+                    Some((truth, error)) => format!(
+                        "{name} {fitted:.4} m (truth {truth:.4}, {:+.2} mm)",
+                        error * 1e3
+                    ),
+                    None => format!("{name} {fitted:.4} m"),
+                };
+            let shoulder = match t.shoulder.zip(m.error_shoulder) {
+                Some(([x, z], error)) => format!(
+                    "shoulder ({:.4}, {:.4}) m (truth ({x:.4}, {z:.4}), {:.2} mm off)",
+                    m.shoulder[0],
+                    m.shoulder[1],
+                    error * 1e3
+                ),
+                None => format!("shoulder ({:.4}, {:.4}) m", m.shoulder[0], m.shoulder[1]),
+            };
+            writeln!(
+                out,
+                "model: {}  {}  {shoulder}",
+                length("l1", m.l1, t.l1, m.error_l1),
+                length("l2", m.l2, t.l2, m.error_l2),
+            )
+        }
         None => writeln!(out, "model: none validated"),
     };
     if report.monitor_events.is_empty() {
@@ -373,6 +477,9 @@ impl ClosedLoopPlant for ReferencePlant {
 /// `matches` are the subcommand's (where `--effect` and `--set` stand).
 pub fn run(args: &RunArgs, matches: &clap::ArgMatches) -> Result<(), CliError> {
     let config = config(args)?;
+    if let Some(endpoint) = crate::external::endpoint(&args.plant, args.seed)? {
+        return crate::external::run(args, &endpoint, config);
+    }
     let mut params = limb_sim::PlantParameters::new(args.l1, args.l2);
     params.seed = args.seed;
     let effects = crate::simulate::effects(&args.effect, &args.set, matches)?;
@@ -397,7 +504,7 @@ pub fn run(args: &RunArgs, matches: &clap::ArgMatches) -> Result<(), CliError> {
 /// `limb run` options.
 #[derive(Debug, clap::Args)]
 pub struct RunArgs {
-    /// Upper-arm length of the simulated person [m].
+    /// Upper-arm length of the simulated person [m] (reference plant).
     #[arg(long, default_value_t = 0.30)]
     pub l1: f64,
     /// Forearm length (elbow to grasp) of the simulated person [m].
@@ -413,6 +520,9 @@ pub struct RunArgs {
     /// A parameter KEY=VALUE of the preceding --effect (SI units).
     #[arg(long)]
     pub set: Vec<String>,
+    /// Another plant than the reference plant (`external-plant.md`).
+    #[command(flatten)]
+    pub plant: crate::external::PlantArgs,
     /// Overrides the kernel's force limit [N] (e.g. below the lift force, to see a safe stop).
     #[arg(long)]
     pub max_force: Option<f64>,

@@ -44,8 +44,8 @@ pub const COLUMNS: [&str; 11] = [
 /// A robot's own columns of the session log, after [`COLUMNS`].
 pub trait Logged {
     /// Their names.
-    fn columns(&self) -> &'static [&'static str] {
-        &[]
+    fn columns(&self) -> Vec<&str> {
+        Vec::new()
     }
     /// Their values for the frame just stepped, one per column (`None`:
     /// empty), appended to `out`.
@@ -195,7 +195,7 @@ impl<R: Logged + ?Sized, W: Write> Observer<R> for SessionLog<W> {
             extra: &self.extra,
         };
         self.csv
-            .row(|| header(robot.columns()), |line| row.write(line));
+            .row(|| header(&robot.columns()), |line| row.write(line));
     }
 }
 

@@ -73,7 +73,7 @@ impl<R: Robot> Robot for Paced<R> {
 }
 
 impl<R: crate::log::Logged> crate::log::Logged for Paced<R> {
-    fn columns(&self) -> &'static [&'static str] {
+    fn columns(&self) -> Vec<&str> {
         self.robot.columns()
     }
 

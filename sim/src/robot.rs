@@ -75,8 +75,8 @@ impl<P: ClosedLoopPlant> Robot for ReferenceRobot<P> {
 
 #[cfg(feature = "std")]
 impl<P: ClosedLoopPlant> limb_session::log::Logged for ReferenceRobot<P> {
-    fn columns(&self) -> &'static [&'static str] {
-        &crate::log::TRUTH_COLUMNS
+    fn columns(&self) -> Vec<&str> {
+        crate::log::TRUTH_COLUMNS.to_vec()
     }
 
     fn values(&self, out: &mut Vec<Option<f64>>) {

@@ -1,0 +1,308 @@
+//! `limb run` on another plant than the embedded reference plant: any
+//! simulator that speaks `limb-plant/1` (`../shared/spec/external-plant.md`),
+//! reached by `--plant-cmd`, `--plant-tcp` or by name (`--plant myoarm
+//! --subject NAME`, `--plant toy`).
+//!
+//! The session is the reference plant's ([`crate::run::session`]: the
+//! same loop, operator, recorder and JSON keys); the truth is what the
+//! plant's truth gives at its first frame, the joint extremes use the
+//! plant's own `shoulder_elevation`/`elbow_flexion` when it gives them,
+//! else plant.md's `q1`/`q2`. A plant that breaks the protocol ends the
+//! session as a robot failure: the kernel is stopped, the logs hold every
+//! frame up to the last good one, `--json` still prints one object
+//! (`"completed": false`, `"robot_error"`) and `limb` exits 1 with one
+//! line on stderr naming the plant's line and what was wrong.
+//!
+//! Named plants live in this repository's `plants/` folder (or the folder
+//! `LIMB_PLANTS` names): `myoarm` runs `plants/myoarm/plant.py` in the
+//! Python environment `plants/myoarm/setup.sh` makes (run once, on first
+//! use); `toy` runs `plants/toy/toy_plant.py` with the system `python3`.
+
+use crate::error::{emit, print_json, CliError};
+use crate::run::{human, record_event, session, RunArgs, SessionReport, TrueJoints, TruthReport};
+use crate::session_log::LogFile;
+use limb_kernel::{Kernel, KernelConfig, Request};
+use limb_plant::{Endpoint, PlantError, PlantRobot};
+use limb_session::SessionPlan;
+use serde::Serialize;
+use std::path::PathBuf;
+use std::time::Duration;
+
+/// The plant options of `limb run`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct PlantArgs {
+    /// Run on an external plant started as this command line (it speaks
+    /// limb-plant/1 on its stdin/stdout).
+    #[arg(long, conflicts_with_all = ["plant_tcp", "plant", "l1", "l2", "effect"])]
+    pub plant_cmd: Option<String>,
+    /// Run on an external plant listening at HOST:PORT.
+    #[arg(long, conflicts_with_all = ["plant", "l1", "l2", "effect"])]
+    pub plant_tcp: Option<String>,
+    /// Run on a plant of this repository by name (`myoarm` needs --subject).
+    #[arg(long, value_enum, conflicts_with_all = ["l1", "l2", "effect"])]
+    pub plant: Option<NamedPlant>,
+    /// The MyoArm plant's subject (`limb run --plant myoarm --subject NAME`;
+    /// the list: plants/myoarm/README.md).
+    #[arg(long)]
+    pub subject: Option<String>,
+    /// Seconds to wait for each line of an external plant, the handshake
+    /// included.
+    #[arg(long, default_value_t = 10.0)]
+    pub plant_timeout: f64,
+}
+
+/// Plants of this repository.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum NamedPlant {
+    /// MuJoCo + MyoSuite's musculoskeletal arm `myoarm_r` (plants/myoarm).
+    Myoarm,
+    /// plant.md's arm written again in Python (plants/toy): a protocol example.
+    Toy,
+}
+
+/// The repository's `plants/` folder.
+fn plants_dir() -> PathBuf {
+    std::env::var_os("LIMB_PLANTS").map_or_else(
+        || PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../plants")),
+        PathBuf::from,
+    )
+}
+
+/// `path` quoted for `sh`.
+fn quoted(path: &std::path::Path) -> String {
+    format!("'{}'", path.display().to_string().replace('\'', r"'\''"))
+}
+
+/// The plant `args` name, if any (`seed`: the session's noise seed, passed
+/// to named plants).
+///
+/// # Errors
+/// [`CliError::BadInput`] for `--plant myoarm` without `--subject`, a
+/// subject on another plant, or a timeout that is not a positive number;
+/// [`CliError::Internal`] when the MyoArm environment cannot be set up.
+pub fn endpoint(args: &PlantArgs, seed: u64) -> Result<Option<Endpoint>, CliError> {
+    if !(args.plant_timeout.is_finite() && args.plant_timeout > 0.0) {
+        return Err(CliError::BadInput(format!(
+            "--plant-timeout {}: not a positive number of seconds",
+            args.plant_timeout
+        )));
+    }
+    if args.subject.is_some() && args.plant != Some(NamedPlant::Myoarm) {
+        return Err(CliError::BadInput("--subject needs --plant myoarm".into()));
+    }
+    if let Some(line) = &args.plant_cmd {
+        return Ok(Some(Endpoint::Command(line.clone())));
+    }
+    if let Some(address) = &args.plant_tcp {
+        return Ok(Some(Endpoint::Tcp(address.clone())));
+    }
+    let dir = plants_dir();
+    match args.plant {
+        None => Ok(None),
+        Some(NamedPlant::Toy) => Ok(Some(Endpoint::Command(format!(
+            "python3 {} --seed {seed}",
+            quoted(&dir.join("toy/toy_plant.py"))
+        )))),
+        Some(NamedPlant::Myoarm) => {
+            let subject = args.subject.as_deref().ok_or_else(|| {
+                CliError::BadInput(
+                    "--plant myoarm needs --subject NAME (plants/myoarm/README.md)".into(),
+                )
+            })?;
+            let python = myoarm_python(&dir)?;
+            Ok(Some(Endpoint::Command(format!(
+                "{} {} --subject {} --seed {seed}",
+                quoted(&python),
+                quoted(&dir.join("myoarm/plant.py")),
+                quoted(std::path::Path::new(subject)),
+            ))))
+        }
+    }
+}
+
+/// The MyoArm plant's Python, its environment set up on first use.
+fn myoarm_python(dir: &std::path::Path) -> Result<PathBuf, CliError> {
+    let python = dir.join("myoarm/.venv/bin/python");
+    if python.exists() {
+        return Ok(python);
+    }
+    eprintln!(
+        "limb: setting up the MyoArm plant's Python environment (once): plants/myoarm/setup.sh"
+    );
+    let status = std::process::Command::new("bash")
+        .arg(dir.join("myoarm/setup.sh"))
+        .stdout(std::process::Stdio::null())
+        .status()
+        .map_err(|e| CliError::Internal(format!("plants/myoarm/setup.sh: {e}")))?;
+    if status.success() && python.exists() {
+        Ok(python)
+    } else {
+        Err(CliError::Internal(format!(
+            "plants/myoarm/setup.sh failed ({status}): the MyoArm plant cannot run"
+        )))
+    }
+}
+
+impl TrueJoints for PlantRobot {
+    fn true_joints(&self) -> Option<[f64; 2]> {
+        let frame = self.last_frame()?;
+        let own = self
+            .truth_of(frame, "shoulder_elevation")
+            .zip(self.truth_of(frame, "elbow_flexion"));
+        let plant_md = || self.truth_of(frame, "q1").zip(self.truth_of(frame, "q2"));
+        own.or_else(plant_md)
+            .map(|(shoulder, elbow)| [shoulder, elbow])
+    }
+}
+
+/// The truth at the plant's first frame.
+fn truth_of(robot: &PlantRobot) -> TruthReport {
+    let Some(frame) = robot.first_frame() else {
+        return TruthReport::default();
+    };
+    let value = |name| robot.truth_of(frame, name);
+    let point = |x, z| value(x).zip(value(z)).map(|(x, z)| [x, z]);
+    TruthReport {
+        l1: value("l1"),
+        l2: value("l2"),
+        elbow: point("elbow_x", "elbow_z"),
+        shoulder: point("shoulder_x", "shoulder_z"),
+    }
+}
+
+/// The plant as the report shows it.
+#[derive(Debug, Clone, Serialize)]
+pub struct PlantReport {
+    /// The plant's name for itself (handshake).
+    pub name: String,
+    /// Its period [s].
+    pub dt: f64,
+    /// Frames the kernel stepped on.
+    pub frames: u64,
+    /// The reason the plant gave when it ended the session itself.
+    pub end: Option<String>,
+    /// Keys the plant sent that limb does not know (ignored, as the
+    /// protocol says).
+    pub unknown_keys: Vec<String>,
+}
+
+/// A robot failure as the report shows it.
+#[derive(Debug, Clone, Serialize)]
+pub struct RobotError {
+    /// Stable code of the fault (`limb_plant::Fault::code`).
+    pub code: &'static str,
+    /// The plant's line it was seen on (1 = the handshake).
+    pub line: u64,
+    /// What was wrong, in words.
+    pub message: String,
+}
+
+impl From<&PlantError> for RobotError {
+    fn from(error: &PlantError) -> Self {
+        Self {
+            code: error.fault.code(),
+            line: error.line,
+            message: error.to_string(),
+        }
+    }
+}
+
+/// `limb run --json` on an external plant.
+#[derive(Debug, Serialize)]
+struct ExternalReport<'a> {
+    #[serde(flatten)]
+    session: Option<&'a SessionReport>,
+    /// False when the handshake failed (the `session` keys are absent).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    completed: Option<bool>,
+    plant: Option<PlantReport>,
+    robot_error: Option<RobotError>,
+}
+
+/// `limb run` on the external plant at `endpoint`.
+///
+/// # Errors
+/// [`CliError::RobotFailure`] when the plant broke the protocol (after
+/// the report is printed), [`CliError::BadInput`] for an unusable
+/// configuration or log path.
+pub fn run(args: &RunArgs, endpoint: &Endpoint, config: KernelConfig) -> Result<(), CliError> {
+    let plan = SessionPlan::default();
+    let mut kernel = Box::new(
+        Kernel::new(config)
+            .map_err(|e| CliError::BadInput(format!("kernel configuration: {e}")))?,
+    );
+    let mut log = LogFile::create(args.log.as_deref())?;
+    let timeout = Duration::from_secs_f64(args.plant.plant_timeout);
+    let mut robot = match PlantRobot::connect(endpoint, timeout, plan.timeout) {
+        Ok(robot) => robot,
+        Err(error) => {
+            LogFile::finish(log, args.log.as_deref())?;
+            if args.json {
+                print_json(&ExternalReport {
+                    session: None,
+                    completed: Some(false),
+                    plant: None,
+                    robot_error: Some(RobotError::from(&error)),
+                })?;
+            }
+            return Err(CliError::RobotFailure(error.to_string()));
+        }
+    };
+    let (mut report, last_now) = session(&mut kernel, &mut robot, &plan, log.as_mut(), truth_of);
+    if robot.failure().is_some() {
+        // The robot failed: the kernel stops (its trace says so).
+        let _ = kernel.request(Request::Stop, last_now);
+        while let Some(event) = kernel.pop_event() {
+            record_event(&mut report, &event);
+        }
+        report.final_state = kernel.state().kind();
+        report.completed = false;
+    }
+    let handshake = robot.handshake().clone();
+    let ending = robot.finish(if report.completed {
+        "session completed"
+    } else {
+        "session ended"
+    });
+    LogFile::finish(log, args.log.as_deref())?;
+    if ending.failure.is_some() {
+        report.completed = false;
+    }
+    let plant = PlantReport {
+        name: handshake.name.clone(),
+        dt: handshake.dt,
+        frames: ending.frames,
+        end: ending.plant_end.clone(),
+        unknown_keys: ending.unknown_keys.clone(),
+    };
+    if args.json {
+        print_json(&ExternalReport {
+            session: Some(&report),
+            completed: None,
+            plant: Some(plant),
+            robot_error: ending.failure.as_ref().map(RobotError::from),
+        })?;
+    } else if args.digest {
+        emit(&format!("{}\n", report.digest))?;
+    } else {
+        let header = format!(
+            "limb run: external plant \"{}\" (dt {} s), kernel at {:.0} Hz, force limit {:.1} N",
+            handshake.name, handshake.dt, plan.rate, config.limits.max_force
+        );
+        let mut text = human(&report, &header);
+        if let Some(reason) = &ending.plant_end {
+            text.push_str(&format!("the plant ended the session: {reason}\n"));
+        }
+        if !ending.unknown_keys.is_empty() {
+            text.push_str(&format!(
+                "ignored unknown keys: {}\n",
+                ending.unknown_keys.join(", ")
+            ));
+        }
+        emit(&text)?;
+    }
+    match ending.failure {
+        Some(error) => Err(CliError::RobotFailure(error.to_string())),
+        None => Ok(()),
+    }
+}
