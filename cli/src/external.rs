@@ -96,12 +96,11 @@ pub fn endpoint(args: &PlantArgs, seed: u64) -> Result<Option<Endpoint>, CliErro
     if let Some(address) = &args.plant_tcp {
         return Ok(Some(Endpoint::Tcp(address.clone())));
     }
-    let dir = plants_dir();
     match args.plant {
         None => Ok(None),
         Some(NamedPlant::Toy) => Ok(Some(Endpoint::Command(format!(
             "python3 {} --seed {seed}",
-            quoted(&dir.join("toy/toy_plant.py"))
+            quoted(&plants_dir().join("toy/toy_plant.py"))
         )))),
         Some(NamedPlant::Myoarm) => {
             let subject = args.subject.as_deref().ok_or_else(|| {
@@ -109,15 +108,27 @@ pub fn endpoint(args: &PlantArgs, seed: u64) -> Result<Option<Endpoint>, CliErro
                     "--plant myoarm needs --subject NAME (plants/myoarm/README.md)".into(),
                 )
             })?;
-            let python = myoarm_python(&dir)?;
-            Ok(Some(Endpoint::Command(format!(
-                "{} {} --subject {} --seed {seed}",
-                quoted(&python),
-                quoted(&dir.join("myoarm/plant.py")),
+            Ok(Some(Endpoint::Command(myoarm_command(&format!(
+                "--subject {} --seed {seed}",
                 quoted(std::path::Path::new(subject)),
-            ))))
+            ))?)))
         }
     }
+}
+
+/// The MyoArm plant's command line with `options` (its environment set up
+/// on first use).
+///
+/// # Errors
+/// [`CliError::Internal`] when the environment cannot be set up.
+pub fn myoarm_command(options: &str) -> Result<String, CliError> {
+    let dir = plants_dir();
+    let python = myoarm_python(&dir)?;
+    Ok(format!(
+        "{} {} {options}",
+        quoted(&python),
+        quoted(&dir.join("myoarm/plant.py")),
+    ))
 }
 
 /// The MyoArm plant's Python, its environment set up on first use.
@@ -219,33 +230,61 @@ struct ExternalReport<'a> {
     robot_error: Option<RobotError>,
 }
 
-/// `limb run` on the external plant at `endpoint`.
+/// One session on an external plant: its report, the plant, and the robot
+/// failure that ended it, if one did.
+pub struct PlantSession {
+    /// The session as on the reference plant.
+    pub report: SessionReport,
+    /// The plant (none when its handshake failed).
+    pub plant: Option<PlantReport>,
+    /// The robot failure, if one ended the session.
+    pub failure: Option<PlantError>,
+}
+
+impl PlantSession {
+    /// The JSON object of `limb run --json` on an external plant.
+    pub fn json(&self) -> serde_json::Value {
+        let report = ExternalReport {
+            session: self.plant.as_ref().map(|_| &self.report),
+            completed: self.plant.is_none().then_some(false),
+            plant: self.plant.clone(),
+            robot_error: self.failure.as_ref().map(RobotError::from),
+        };
+        serde_json::to_value(report).unwrap_or_default()
+    }
+}
+
+/// Runs one session of a kernel configured by `config` on the plant at
+/// `endpoint` (each wait for a line bounded by `timeout`), writing the
+/// session log at `log_path` when given.
 ///
 /// # Errors
-/// [`CliError::RobotFailure`] when the plant broke the protocol (after
-/// the report is printed), [`CliError::BadInput`] for an unusable
-/// configuration or log path.
-pub fn run(args: &RunArgs, endpoint: &Endpoint, config: KernelConfig) -> Result<(), CliError> {
+/// [`CliError::BadInput`] for an unusable configuration or log path. A
+/// robot failure is not an error here: it is in [`PlantSession::failure`].
+pub fn plant_session(
+    endpoint: &Endpoint,
+    config: KernelConfig,
+    timeout: Duration,
+    log_path: Option<&std::path::Path>,
+) -> Result<PlantSession, CliError> {
     let plan = SessionPlan::default();
     let mut kernel = Box::new(
         Kernel::new(config)
             .map_err(|e| CliError::BadInput(format!("kernel configuration: {e}")))?,
     );
-    let mut log = LogFile::create(args.log.as_deref())?;
-    let timeout = Duration::from_secs_f64(args.plant.plant_timeout);
+    let mut log = LogFile::create(log_path)?;
     let mut robot = match PlantRobot::connect(endpoint, timeout, plan.timeout) {
         Ok(robot) => robot,
         Err(error) => {
-            LogFile::finish(log, args.log.as_deref())?;
-            if args.json {
-                print_json(&ExternalReport {
-                    session: None,
-                    completed: Some(false),
-                    plant: None,
-                    robot_error: Some(RobotError::from(&error)),
-                })?;
-            }
-            return Err(CliError::RobotFailure(error.to_string()));
+            LogFile::finish(log, log_path)?;
+            let (report, _) = session(&mut kernel, &mut Idle, &plan, None, |_| {
+                TruthReport::default()
+            });
+            return Ok(PlantSession {
+                report,
+                plant: None,
+                failure: Some(error),
+            });
         }
     };
     let (mut report, last_now) = session(&mut kernel, &mut robot, &plan, log.as_mut(), truth_of);
@@ -264,44 +303,81 @@ pub fn run(args: &RunArgs, endpoint: &Endpoint, config: KernelConfig) -> Result<
     } else {
         "session ended"
     });
-    LogFile::finish(log, args.log.as_deref())?;
+    LogFile::finish(log, log_path)?;
     if ending.failure.is_some() {
         report.completed = false;
     }
-    let plant = PlantReport {
-        name: handshake.name.clone(),
-        dt: handshake.dt,
-        frames: ending.frames,
-        end: ending.plant_end.clone(),
-        unknown_keys: ending.unknown_keys.clone(),
-    };
+    Ok(PlantSession {
+        report,
+        plant: Some(PlantReport {
+            name: handshake.name,
+            dt: handshake.dt,
+            frames: ending.frames,
+            end: ending.plant_end,
+            unknown_keys: ending.unknown_keys,
+        }),
+        failure: ending.failure,
+    })
+}
+
+/// A robot that never sends a frame (the session of a plant whose
+/// handshake failed: the kernel's report with no step).
+struct Idle;
+
+impl limb_session::Robot for Idle {
+    type Error = core::convert::Infallible;
+
+    fn sense(&mut self) -> Result<limb_session::Sensed, Self::Error> {
+        Ok(limb_session::Sensed::Ended)
+    }
+
+    fn actuate(&mut self, _: &limb_kernel::Command) -> Result<(), Self::Error> {
+        Ok(())
+    }
+}
+
+impl TrueJoints for Idle {
+    fn true_joints(&self) -> Option<[f64; 2]> {
+        None
+    }
+}
+
+impl limb_session::log::Logged for Idle {}
+
+/// `limb run` on the external plant at `endpoint`.
+///
+/// # Errors
+/// [`CliError::RobotFailure`] when the plant broke the protocol (after
+/// the report is printed), [`CliError::BadInput`] for an unusable
+/// configuration or log path.
+pub fn run(args: &RunArgs, endpoint: &Endpoint, config: KernelConfig) -> Result<(), CliError> {
+    let timeout = Duration::from_secs_f64(args.plant.plant_timeout);
+    let outcome = plant_session(endpoint, config, timeout, args.log.as_deref())?;
     if args.json {
-        print_json(&ExternalReport {
-            session: Some(&report),
-            completed: None,
-            plant: Some(plant),
-            robot_error: ending.failure.as_ref().map(RobotError::from),
-        })?;
+        print_json(&outcome.json())?;
     } else if args.digest {
-        emit(&format!("{}\n", report.digest))?;
-    } else {
+        emit(&format!("{}\n", outcome.report.digest))?;
+    } else if let Some(plant) = &outcome.plant {
         let header = format!(
             "limb run: external plant \"{}\" (dt {} s), kernel at {:.0} Hz, force limit {:.1} N",
-            handshake.name, handshake.dt, plan.rate, config.limits.max_force
+            plant.name,
+            plant.dt,
+            SessionPlan::default().rate,
+            config.limits.max_force
         );
-        let mut text = human(&report, &header);
-        if let Some(reason) = &ending.plant_end {
+        let mut text = human(&outcome.report, &header);
+        if let Some(reason) = &plant.end {
             text.push_str(&format!("the plant ended the session: {reason}\n"));
         }
-        if !ending.unknown_keys.is_empty() {
+        if !plant.unknown_keys.is_empty() {
             text.push_str(&format!(
                 "ignored unknown keys: {}\n",
-                ending.unknown_keys.join(", ")
+                plant.unknown_keys.join(", ")
             ));
         }
         emit(&text)?;
     }
-    match ending.failure {
+    match outcome.failure {
         Some(error) => Err(CliError::RobotFailure(error.to_string())),
         None => Ok(()),
     }

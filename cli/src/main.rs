@@ -10,6 +10,7 @@ mod error;
 mod estimate;
 mod external;
 mod kuka;
+mod plant_population;
 mod population;
 mod run;
 mod session_log;

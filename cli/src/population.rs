@@ -28,6 +28,9 @@ pub struct PopulationArgs {
     /// Print one JSON object instead of the summary.
     #[arg(long)]
     pub json: bool,
+    /// Sessions on external plants instead of the reference plant's arms.
+    #[command(flatten)]
+    pub plants: crate::plant_population::PlantPopulationArgs,
 }
 
 /// One arm's session.
@@ -142,11 +145,7 @@ fn run_arm(l1: f64, l2: f64, seed: u64, config: &KernelConfig) -> Result<ArmOutc
     let estimate_duration = time_of("Estimate → Validated")
         .zip(time_of("Grasp → Estimate"))
         .map(|(end, start)| end - start);
-    let refusal = report
-        .events
-        .iter()
-        .find(|line| line.what.starts_with("Estimate → SafeStop"))
-        .map(|line| line.what.clone());
+    let refusal = crate::plant_population::refusal(&report);
     Ok(ArmOutcome {
         l1,
         l2,
@@ -234,6 +233,9 @@ pub fn population(arms: usize, seed: u64) -> Result<PopulationReport, CliError> 
 
 /// `limb population`.
 pub fn run(args: &PopulationArgs) -> Result<(), CliError> {
+    if args.plants.given() {
+        return crate::plant_population::run(&args.plants, args.seed, args.json);
+    }
     if args.arms == 0 {
         return Err(CliError::BadInput("--arms must be at least 1".into()));
     }

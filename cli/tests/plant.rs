@@ -137,7 +137,7 @@ fn a_toy_plant_session_runs_over_tcp() {
     assert!(plant.wait().unwrap().success());
 }
 
-/// Each way a plant can break the protocol at its 200th frame (line 201)
+/// REQ-ADP-004: each way a plant can break the protocol at its 200th frame (line 201)
 /// ends the session as a robot failure with its named error: exit 1, one
 /// JSON object with `completed: false`, one line on stderr naming the
 /// line, the kernel stopped, and the log holding the 199 good frames.
@@ -184,7 +184,7 @@ fn a_misbehaving_plant_ends_the_session_with_a_named_error() {
     }
 }
 
-/// A handshake that is not limb-plant/1, that has an unusable dt, or that
+/// REQ-ADP-004: a handshake that is not limb-plant/1, that has an unusable dt, or that
 /// never comes is refused at line 1: exit 1, one JSON object.
 #[test]
 fn a_bad_handshake_is_refused() {
@@ -233,4 +233,32 @@ fn an_unreachable_plant_is_a_robot_failure() {
     assert_eq!(out.status.code(), Some(1));
     let report: Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
     assert_eq!(report["completed"], false);
+}
+
+/// `limb population` over plant commands: one session each, in the order
+/// given, a robot failure counted and named, the model errors against each
+/// plant's own truth.
+#[test]
+fn a_population_of_plant_commands_is_one_session_each() {
+    let good = format!("{} --l1 0.33 --l2 0.18 --seed 4", toy());
+    let bad = format!("{} --fault nan --at 50", toy());
+    let out = limb(&[
+        "population",
+        "--plant-cmd",
+        &good,
+        "--plant-cmd",
+        &bad,
+        "--json",
+    ]);
+    let report = common::json_of(&out);
+    assert_eq!(report["sessions"], 2);
+    assert_eq!(report["validated"], 1);
+    assert_eq!(report["within_5mm"], 1);
+    assert_eq!(report["robot_failures"], 1);
+    let outcomes = report["outcomes"].as_array().unwrap();
+    assert_eq!(outcomes[0]["name"], good.as_str());
+    assert_eq!(outcomes[0]["truth"], serde_json::json!([0.33, 0.18]));
+    assert!(outcomes[0]["error_l1"].as_f64().unwrap().abs() < 0.55e-3);
+    assert_eq!(outcomes[1]["robot_error"]["code"], "non_finite");
+    assert_eq!(outcomes[1]["validated"], false);
 }

@@ -225,6 +225,8 @@ pub fn read_bounded_line(reader: &mut impl BufRead) -> Result<Vec<u8>, Fault> {
 mod tests {
     use super::*;
 
+    /// REQ-ADP-004: a line of 64 KiB passes, one byte more is refused
+    /// without being read whole.
     #[test]
     fn a_line_of_the_limit_passes_and_one_byte_more_is_refused() {
         let mut ok = vec![b'a'; MAX_LINE];

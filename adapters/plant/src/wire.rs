@@ -413,6 +413,7 @@ mod tests {
         assert!(decoded.unknown.is_empty());
     }
 
+    /// REQ-ADP-004: each broken frame is refused with its named fault.
     #[test]
     fn each_broken_frame_has_its_named_fault() {
         let truth = names(&["l1"]);
@@ -538,8 +539,8 @@ mod tests {
             }
         }
 
-        /// No line, however broken, panics the decoder: it is a message
-        /// or a named fault.
+        /// REQ-ADP-004: no line, however broken, panics the decoder: it is
+        /// a message or a named fault.
         #[test]
         fn any_line_is_a_message_or_a_fault(line in proptest::collection::vec(any::<u8>(), 0..200)) {
             let _ = decode_message(&line, &names(&["q1"]));
