@@ -20,6 +20,7 @@ use crate::validate::ValidationLimits;
 /// A closed interval [low, high].
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct Interval {
     /// Lower bound.
     pub low: f64,
@@ -55,6 +56,7 @@ impl Interval {
 /// (x [N/m], z [N/m], psi [N m/rad]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct ImpedanceGains {
     /// Stiffness K: x, z [N/m], psi [N m/rad].
     pub stiffness: [f64; 3],
@@ -80,6 +82,7 @@ impl Default for ImpedanceGains {
 /// Limits the monitors enforce.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct SafetyLimits {
     /// Largest interaction force magnitude |(fx, fz)| [N]. Also the
     /// saturation of the commanded wrench. The reference lift peaks near
@@ -237,6 +240,7 @@ impl SafetyLimits {
 /// The whole kernel configuration.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct KernelConfig {
     /// Impedance of the command generator.
     pub impedance: ImpedanceGains,

@@ -42,6 +42,7 @@ use crate::path::PathSample;
 /// How the kernel shapes and ends its estimation lift.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct LiftShaping {
     /// Farthest the set-point may move from the grasp before a provisional
     /// forearm exists [m]. 0.25 m: the forearm sweeps the

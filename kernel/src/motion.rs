@@ -19,6 +19,7 @@ pub const MINIMUM_JERK_PEAK_RATE: f64 = 1.875;
 /// Parameters of the estimation motion of `plant.md` (paper eq. 3).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct EstimationMotionParameters {
     /// Lift length l0 [m]; the paper and `plant.md` use 0.30 m.
     pub lift_length: f64,

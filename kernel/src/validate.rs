@@ -25,6 +25,7 @@ use crate::geometry::Point;
 /// Acceptance limits of the validator.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct ValidationLimits {
     /// Shortest plausible upper arm [m].
     pub min_upper_arm_length: f64,

@@ -127,7 +127,12 @@ impl WireFormat {
 /// A supervisory command. Each maps to one kernel request except
 /// [`SupervisorCommand::UpdateLimits`].
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "command", rename_all = "snake_case")]
+#[serde(
+    tag = "command",
+    rename_all = "snake_case",
+    deny_unknown_fields,
+    from = "StrictCommand"
+)]
 pub enum SupervisorCommand {
     /// `Request::StartEstimation`.
     StartEstimation,
@@ -150,6 +155,34 @@ pub enum SupervisorCommand {
         /// The proposed limits.
         limits: SafetyLimits,
     },
+}
+
+/// What a [`SupervisorCommand`] is decoded through: serde does not refuse
+/// unknown fields beside the tag of an internally tagged unit variant
+/// (`{"command": "stop", "force": true}` would decode as a stop), so every
+/// variant is a struct variant here, each refusing unknown fields.
+#[derive(Deserialize)]
+#[serde(tag = "command", rename_all = "snake_case", deny_unknown_fields)]
+enum StrictCommand {
+    StartEstimation {},
+    ApproveManipulation { target: Joints },
+    FinishManipulation {},
+    Stop {},
+    Reset {},
+    UpdateLimits { limits: SafetyLimits },
+}
+
+impl From<StrictCommand> for SupervisorCommand {
+    fn from(command: StrictCommand) -> Self {
+        match command {
+            StrictCommand::StartEstimation {} => Self::StartEstimation,
+            StrictCommand::ApproveManipulation { target } => Self::ApproveManipulation { target },
+            StrictCommand::FinishManipulation {} => Self::FinishManipulation,
+            StrictCommand::Stop {} => Self::Stop,
+            StrictCommand::Reset {} => Self::Reset,
+            StrictCommand::UpdateLimits { limits } => Self::UpdateLimits { limits },
+        }
+    }
 }
 
 /// A signed command on `cmd/request`.
@@ -176,8 +209,10 @@ pub struct EmergencyStopMessage {
     pub sequence: u64,
 }
 
-/// A supervisor heartbeat on `alive/supervisor` (signed).
+/// A supervisor heartbeat on `alive/supervisor` (signed). Unknown fields
+/// are refused: a heartbeat with one does not count.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Heartbeat {
     /// Strictly increasing per robot, across all its supervisors: the node
     /// accepts a heartbeat only above the last one it accepted. Supervisors
@@ -413,6 +448,53 @@ mod tests {
                     elbow_flexion: 0.8,
                 },
             },
+        }
+    }
+
+    /// PROTOCOL.md: unknown fields are refused as malformed, at every
+    /// level of a command and in a heartbeat (the foreign supervisor's
+    /// cases: a stop with `force`, a start or finish with an extra field,
+    /// an approval with a `speed` beside its target, a limit update with
+    /// an unknown limit, a heartbeat naming its `supervisor`).
+    #[test]
+    fn unknown_fields_are_refused_everywhere() {
+        let limits = serde_json::to_value(SafetyLimits::default()).unwrap();
+        let mut extra_limit = limits.clone();
+        extra_limit["max_speed_typo"] = serde_json::json!(1.0);
+        let mut extra_interval = limits.clone();
+        extra_interval["elbow_flexion"]["mid"] = serde_json::json!(0.0);
+        let bad = [
+            serde_json::json!({"sequence": 1, "command": {"command": "stop", "force": true}}),
+            serde_json::json!({"sequence": 1, "command": {"command": "start_estimation", "now": 1}}),
+            serde_json::json!({"sequence": 1, "command": {"command": "finish_manipulation", "force": true}}),
+            serde_json::json!({"sequence": 1, "command": {"command": "reset", "x": 0}}),
+            serde_json::json!({"sequence": 1, "command": {"command": "approve_manipulation",
+                "target": {"shoulder_elevation": 0.6, "elbow_flexion": 0.8}, "speed": 9.9}}),
+            serde_json::json!({"sequence": 1, "command": {"command": "approve_manipulation",
+                "target": {"shoulder_elevation": 0.6, "elbow_flexion": 0.8, "speed": 9.9}}}),
+            serde_json::json!({"sequence": 1, "command": {"command": "update_limits", "limits": extra_limit}}),
+            serde_json::json!({"sequence": 1, "command": {"command": "update_limits", "limits": extra_interval}}),
+            serde_json::json!({"sequence": 1, "command": {"command": "stop"}, "priority": 1}),
+        ];
+        for format in [WireFormat::Json, WireFormat::Cbor] {
+            for message in &bad {
+                let bytes = format.encode(message).unwrap();
+                assert!(
+                    matches!(format.decode_command(&bytes), Err(WireError::Malformed(_))),
+                    "{format:?} accepted {message}"
+                );
+            }
+            let beat = format
+                .encode(&serde_json::json!({"sequence": 5, "supervisor": "me"}))
+                .unwrap();
+            assert!(format.decode::<Heartbeat>(&beat).is_err(), "{format:?}");
+            let good = format.encode(&serde_json::json!({"sequence": 5})).unwrap();
+            assert_eq!(
+                format.decode::<Heartbeat>(&good).unwrap(),
+                Heartbeat { sequence: 5 }
+            );
+            let ok = serde_json::json!({"sequence": 1, "command": {"command": "update_limits", "limits": limits}});
+            assert!(format.decode_command(&format.encode(&ok).unwrap()).is_ok());
         }
     }
 
