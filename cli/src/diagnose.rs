@@ -78,8 +78,7 @@ pub fn run(args: &DiagnoseArgs) -> Result<(), CliError> {
         (Some(l1), Some(l2)) => Lengths::Given(l1, l2),
         _ => Lengths::Fitted,
     };
-    let records =
-        limb_sim::log::read(log).map_err(|error| CliError::BadInput(error.to_string()))?;
+    let records = crate::session_log::read_records(log)?;
     let progress = bar(
         limb_diagnosis::plant::arm::effects::candidates(0.0).len(),
         "candidates fitted",

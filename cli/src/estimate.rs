@@ -56,8 +56,7 @@ struct EstimateReport {
 /// [`CliError::BadInput`] for an unreadable or malformed log, one longer than
 /// the kernel's path buffer, or a log the estimator cannot fit.
 pub fn run(log: &Path, method: MethodArg, json: bool) -> Result<(), CliError> {
-    let records =
-        limb_sim::log::read(log).map_err(|error| CliError::BadInput(error.to_string()))?;
+    let records = crate::session_log::read_records(log)?;
     let path = at_path_rate(records.iter().map(limb_sim::log::Record::path_sample));
     if path.len() > PATH_CAPACITY {
         return Err(CliError::BadInput(format!(

@@ -51,7 +51,8 @@ impl PlantPopulationArgs {
 pub struct SubjectOutcome {
     /// The subject's name, or the plant command.
     pub name: String,
-    /// `tuning` or `held_out` where the plant's subject list says.
+    /// `tuning` or `held-out`, where the plant's subject list says (its
+    /// `role`).
     pub group: Option<String>,
     /// The validator accepted a model.
     pub validated: bool,
@@ -173,7 +174,8 @@ fn myoarm_subjects() -> Result<Vec<(String, Option<String>)>, CliError> {
         .iter()
         .filter_map(|s| {
             let name = s["name"].as_str()?.to_string();
-            Some((name, s["group"].as_str().map(String::from)))
+            let group = s["role"].as_str().or_else(|| s["group"].as_str());
+            Some((name, group.map(String::from)))
         })
         .collect())
 }

@@ -295,9 +295,13 @@ where
         + TrueJoints
         + limb_session::log::Logged,
 {
+    let mut log = log;
+    if let Some(log) = log.as_mut() {
+        log.record("/limb/config", "limb.KernelConfig", 0.0, kernel.config());
+    }
     let mut observers = (Recorder::default(), log);
     let Ok(outcome) = limb_session::run(kernel, robot, &mut Operator::new(*plan), &mut observers);
-    let (mut recorder, _) = observers;
+    let (mut recorder, mut log) = observers;
     let truth = truth(robot);
     let mut digest = recorder.digest;
     digest.push_str(&Digest(&outcome).to_string());
@@ -316,6 +320,9 @@ where
         command_hash: format!("{:016x}", outcome.command_hash),
         digest,
     };
+    if let (Some(log), Some(model)) = (log.as_mut(), &report.model) {
+        log.record("/limb/model", "limb.Model", recorder.last_now, model);
+    }
     (report, recorder.last_now)
 }
 

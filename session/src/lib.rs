@@ -34,6 +34,8 @@ pub mod clock;
 pub mod digest;
 #[cfg(feature = "std")]
 pub mod log;
+#[cfg(feature = "mcap")]
+pub mod mcap_log;
 pub mod operator;
 #[cfg(feature = "std")]
 pub mod paced;

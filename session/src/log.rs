@@ -69,9 +69,24 @@ pub struct Row<'a> {
     pub extra: &'a [Option<f64>],
 }
 
-impl Row<'_> {
-    /// Appends the row and its line end to `text`.
-    pub fn write(&self, text: &mut String) {
+impl<'a> Row<'a> {
+    /// The row of `frame`, stepped on with `command`; `extra` are the
+    /// robot's own columns.
+    pub fn of(frame: &Frame, command: &Command, extra: &'a [Option<f64>]) -> Self {
+        let sample = &frame.sample;
+        Row {
+            time: sample.time,
+            command: command.set_point.map(|s| s.pose),
+            pose: sample.pose,
+            lateral: frame.lateral,
+            wrench: sample.wrench,
+            extra,
+        }
+    }
+
+    /// The row's values, one per column ([`COLUMNS`], then the robot's
+    /// own); `None` is empty.
+    pub fn values(&self) -> impl Iterator<Item = Option<f64>> + '_ {
         let command = self.command.map(|p| [p.x, p.z, p.psi]);
         let base = [
             Some(self.time),
@@ -86,7 +101,12 @@ impl Row<'_> {
             Some(self.wrench.fz),
             Some(self.wrench.ty),
         ];
-        for (i, field) in base.iter().chain(self.extra).enumerate() {
+        base.into_iter().chain(self.extra.iter().copied())
+    }
+
+    /// Appends the row and its line end to `text`.
+    pub fn write(&self, text: &mut String) {
+        for (i, field) in self.values().enumerate() {
             if i > 0 {
                 text.push(',');
             }
@@ -185,15 +205,7 @@ impl<R: Logged + ?Sized, W: Write> Observer<R> for SessionLog<W> {
     fn after_step(&mut self, robot: &R, frame: &Frame, _: StateKind, command: &Command) {
         self.extra.clear();
         robot.values(&mut self.extra);
-        let sample = &frame.sample;
-        let row = Row {
-            time: sample.time,
-            command: command.set_point.map(|s| s.pose),
-            pose: sample.pose,
-            lateral: frame.lateral,
-            wrench: sample.wrench,
-            extra: &self.extra,
-        };
+        let row = Row::of(frame, command, &self.extra);
         self.csv
             .row(|| header(&robot.columns()), |line| row.write(line));
     }

@@ -1,0 +1,93 @@
+//! `limb run --plant myoarm --subject NAME`: a whole kernel session on the
+//! MuJoCo musculoskeletal arm of `plants/myoarm` (MyoSuite's `myoarm_r`),
+//! the plant's Python environment set up by `plants/myoarm/setup.sh`
+//! (`.ci/run` runs it: missing in CI is a failure, elsewhere the test
+//! says it skipped).
+
+mod common;
+
+use std::path::Path;
+use std::process::Command;
+
+fn plant_ready() -> bool {
+    let python = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../plants/myoarm/.venv/bin/python"
+    );
+    if Path::new(python).exists() {
+        return true;
+    }
+    assert!(
+        std::env::var_os("CI").is_none(),
+        "CI must have the MyoArm plant's environment: run plants/myoarm/setup.sh"
+    );
+    eprintln!("skipped: the MyoArm plant's environment is not set up (plants/myoarm/setup.sh)");
+    false
+}
+
+/// One session on the 50th-percentile subject: the plant speaks the
+/// protocol for the whole session (no robot failure), the kernel runs its
+/// estimation lift on it, the truth is the plant's anatomy (glenohumeral
+/// centre to elbow centre), the joint extremes come from the model's own
+/// joints, and the interaction force stays plausible.
+#[test]
+fn a_session_runs_on_the_musculoskeletal_arm() {
+    if !plant_ready() {
+        return;
+    }
+    let out = Command::new(env!("CARGO_BIN_EXE_limb"))
+        .args(["run", "--plant", "myoarm", "--subject", "m50", "--json"])
+        .output()
+        .unwrap();
+    let report = common::json_of(&out);
+    assert!(report["robot_error"].is_null(), "{report}");
+    assert!(report["plant"]["name"].as_str().unwrap().contains("m50"));
+    assert!(
+        report["plant"]["frames"].as_u64().unwrap() > 20_000,
+        "{}",
+        report["plant"]
+    );
+    let l1 = report["truth"]["l1"].as_f64().unwrap();
+    let l2 = report["truth"]["l2"].as_f64().unwrap();
+    assert!(
+        (0.27..0.31).contains(&l1) && (0.20..0.24).contains(&l2),
+        "{l1} {l2}"
+    );
+    let events: Vec<&str> = report["events"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|e| e["what"].as_str())
+        .collect();
+    assert!(
+        events.iter().any(|e| e.starts_with("Grasp → Estimate")),
+        "{events:?}"
+    );
+    let elevation = report["joint_extremes"]["estimate"]["max_shoulder_elevation"]
+        .as_f64()
+        .unwrap();
+    assert!((0.3..2.2).contains(&elevation), "{elevation}");
+    let force = report["max_force_n"].as_f64().unwrap();
+    assert!(force > 5.0 && force < 60.0, "{force}");
+}
+
+/// `--plant myoarm` needs a subject; an unknown subject is the plant's
+/// refusal, reported as a robot failure.
+#[test]
+fn the_myoarm_plant_needs_a_known_subject() {
+    let out = Command::new(env!("CARGO_BIN_EXE_limb"))
+        .args(["run", "--plant", "myoarm"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    if !plant_ready() {
+        return;
+    }
+    let out = Command::new(env!("CARGO_BIN_EXE_limb"))
+        .args(["run", "--plant", "myoarm", "--subject", "nobody", "--json"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(report["completed"], false);
+}
