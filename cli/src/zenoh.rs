@@ -74,6 +74,36 @@ struct Peer {
     /// Payload encoding.
     #[arg(long, value_enum, default_value = "json")]
     format: Format,
+    /// Zenoh's own JSON5 configuration file (user/password, TLS, access
+    /// control, mode, scouting); `--connect` endpoints are added to it.
+    #[arg(long)]
+    zenoh_config: Option<PathBuf>,
+}
+
+/// The Zenoh session configuration: Zenoh's own JSON5 file when given
+/// (its endpoints replaced by `listen`/`connect` where those are given),
+/// else limb's peer configuration (peer mode, explicit endpoints, no
+/// scouting).
+fn session_config(
+    file: Option<&PathBuf>,
+    listen: &[String],
+    connect: &[String],
+) -> Result<limb_zenoh::zenoh::Config, CliError> {
+    let Some(file) = file else {
+        return peer_config(listen, connect, LEASE_MS).map_err(bad_input);
+    };
+    let mut config = limb_zenoh::zenoh::Config::from_file(file)
+        .map_err(|e| CliError::BadInput(format!("{}: {e}", file.display())))?;
+    for (key, endpoints) in [("listen/endpoints", listen), ("connect/endpoints", connect)] {
+        if !endpoints.is_empty() {
+            let list = serde_json::to_string(endpoints)
+                .map_err(|e| CliError::Internal(format!("endpoints: {e}")))?;
+            config
+                .insert_json5(key, &list)
+                .map_err(|e| CliError::BadInput(format!("{}: {key}: {e}", file.display())))?;
+        }
+    }
+    Ok(config)
 }
 
 /// The Zenoh side of a robot's session: who supervises it and how
@@ -101,6 +131,11 @@ pub struct NodeLink {
     /// Supervisor heartbeat timeout [s].
     #[arg(long, default_value_t = 0.25)]
     liveness_timeout: f64,
+    /// Zenoh's own JSON5 configuration file (access control, user/password
+    /// dictionary, TLS, mode); `--listen`/`--connect` endpoints are added
+    /// to it.
+    #[arg(long)]
+    zenoh_config: Option<PathBuf>,
 }
 
 impl NodeLink {
@@ -134,7 +169,7 @@ impl NodeLink {
                 },
             },
         };
-        let config = peer_config(&self.listen, &self.connect, LEASE_MS).map_err(bad_input)?;
+        let config = session_config(self.zenoh_config.as_ref(), &self.listen, &self.connect)?;
         Ok((config, settings))
     }
 }
@@ -230,7 +265,7 @@ fn read_key(path: &PathBuf) -> Result<CommandKey, CliError> {
 }
 
 fn supervisor(peer: &Peer, key: CommandKey) -> Result<Supervisor, CliError> {
-    let config = peer_config(&[], &peer.connect, LEASE_MS).map_err(bad_input)?;
+    let config = session_config(peer.zenoh_config.as_ref(), &[], &peer.connect)?;
     let supervisor =
         Supervisor::connect(config, &peer.robot, peer.format.into(), key).map_err(bad_input)?;
     supervisor.wait_for_node(ANSWER_TIMEOUT).map_err(internal)?;

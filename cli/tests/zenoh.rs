@@ -75,3 +75,108 @@ fn a_node_logs_the_commands_it_refuses() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `--zenoh-config FILE`: Zenoh's own JSON5 configuration, here
+/// user/password authentication and an access-control rule that drops
+/// every command `put` of the user `panel` at the node's ingress. The
+/// supervisor's signed stop is acknowledged; the panel's, signed with the
+/// same key, never reaches the node (no ack, `limb zenoh send` fails), but
+/// its emergency stop does.
+#[test]
+fn a_zenoh_configuration_file_sets_access_control() {
+    let dir = std::env::temp_dir().join(format!("limb-zenoh-acl-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let key = dir.join("key");
+    std::fs::write(&key, "the robot's shared secret\n").unwrap();
+    let dictionary = dir.join("users.txt");
+    std::fs::write(&dictionary, "supervisor:supervisor-pw\npanel:panel-pw\n").unwrap();
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let endpoint = format!("tcp/127.0.0.1:{port}");
+    let scouting = r#"scouting: { multicast: { enabled: false }, gossip: { enabled: false } }"#;
+    let node_config = dir.join("node.json5");
+    std::fs::write(
+        &node_config,
+        format!(
+            r#"{{ mode: "peer", {scouting},
+  transport: {{ auth: {{ usrpwd: {{ user: "node", password: "node-pw", dictionary_file: "{}" }} }} }},
+  access_control: {{ enabled: true, default_permission: "allow",
+    rules: [{{ id: "no-commands", messages: ["put"], flows: ["ingress"], permission: "deny",
+               key_exprs: ["limb/cli-acl/@v2/cmd/request"] }}],
+    subjects: [{{ id: "observers", usernames: ["panel"] }}],
+    policies: [{{ rules: ["no-commands"], subjects: ["observers"] }}] }} }}"#,
+            dictionary.display()
+        ),
+    )
+    .unwrap();
+    let user_config = |user: &str| {
+        let file = dir.join(format!("{user}.json5"));
+        std::fs::write(
+            &file,
+            format!(
+                r#"{{ mode: "peer", {scouting},
+  transport: {{ auth: {{ usrpwd: {{ user: "{user}", password: "{user}-pw" }} }} }} }}"#
+            ),
+        )
+        .unwrap();
+        file
+    };
+    let node = Command::new(env!("CARGO_BIN_EXE_limb"))
+        .args(["zenoh", "node", "--robot", "cli-acl", "--listen", &endpoint])
+        .arg("--zenoh-config")
+        .arg(&node_config)
+        .arg("--key-file")
+        .arg(&key)
+        .args(["--seconds", "12"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let send = |user: &str, what: &[&str]| {
+        let mut command = Command::new(env!("CARGO_BIN_EXE_limb"));
+        command
+            .args([
+                "zenoh",
+                what[0],
+                "--robot",
+                "cli-acl",
+                "--connect",
+                &endpoint,
+            ])
+            .arg("--zenoh-config")
+            .arg(user_config(user));
+        if what[0] == "send" {
+            command.arg("--key-file").arg(&key);
+        }
+        command.args(&what[1..]).output().unwrap()
+    };
+    let panel = send("panel", &["send", "stop"]);
+    assert!(
+        !panel.status.success(),
+        "the panel's command was acknowledged"
+    );
+    let supervisor = send("supervisor", &["send", "stop"]);
+    assert!(
+        supervisor.status.success(),
+        "{}",
+        String::from_utf8_lossy(&supervisor.stderr)
+    );
+    let ack: Value = serde_json::from_slice(&supervisor.stdout).unwrap();
+    assert_eq!(ack["outcome"]["outcome"], "accepted", "{ack}");
+    let estop = send("panel", &["estop"]);
+    assert!(
+        estop.status.success(),
+        "{}",
+        String::from_utf8_lossy(&estop.stderr)
+    );
+    let node = node.wait_with_output().unwrap();
+    assert!(
+        node.status.success(),
+        "{}",
+        String::from_utf8_lossy(&node.stderr)
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
