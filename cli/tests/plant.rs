@@ -115,12 +115,16 @@ fn a_toy_plant_session_completes_over_a_pipe() {
     let _ = std::fs::remove_file(temp("toy.steps.csv"));
 }
 
-/// The same plant listening on TCP: the session reaches Validated.
+/// The same plant listening on TCP, its clock starting at 1 000.5 s (the
+/// first frame's `t` may be anything finite): the session reaches
+/// Validated.
 #[test]
 fn a_toy_plant_session_runs_over_tcp() {
     let mut plant = Command::new("python3")
         .arg(toy().trim_start_matches("python3 "))
-        .args(["--tcp", "0", "--l1", "0.27", "--l2", "0.18"])
+        .args([
+            "--tcp", "0", "--l1", "0.27", "--l2", "0.18", "--t0", "1000.5",
+        ])
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
@@ -261,4 +265,16 @@ fn a_population_of_plant_commands_is_one_session_each() {
     assert!(outcomes[0]["error_l1"].as_f64().unwrap().abs() < 0.55e-3);
     assert_eq!(outcomes[1]["robot_error"]["code"], "non_finite");
     assert_eq!(outcomes[1]["validated"], false);
+}
+
+/// A plant whose program exits with a failure status after a clean
+/// session is a robot failure (`exit_status`): it may have lost data.
+#[test]
+fn a_plant_exiting_with_a_failure_status_is_a_robot_failure() {
+    let command = format!("{} --exit-code 3", toy());
+    let out = limb(&["run", "--plant-cmd", &command, "--json"]);
+    assert_eq!(out.status.code(), Some(1));
+    let report: Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    assert_eq!(report["robot_error"]["code"], "exit_status", "{report}");
+    assert_eq!(report["completed"], false);
 }

@@ -13,7 +13,8 @@ any external simulator has to do.
 
 --tcp PORT listens on 127.0.0.1:PORT for one client (0: a free port; the
 port is printed on stderr as "listening on PORT"); else stdin/stdout.
---fault makes the plant misbehave at frame N (1 = the first frame), to
+--t0 T starts the plant's clock at T; --exit-code N exits N after limb's
+end. --fault makes the plant misbehave at frame N (1 = the first frame), to
 test the client: malformed, missing, nan, string, truth, time, eof,
 silent, long, unknown, extra_key (an unknown key, which must be ignored),
 end (the plant ends the session itself); handshake faults (N ignored):
@@ -179,6 +180,8 @@ def main():
     p.add_argument("--tcp", type=int)
     p.add_argument("--fault")
     p.add_argument("--at", type=int, default=100)
+    p.add_argument("--t0", type=float, default=0.0, help="the first frame's time [s]")
+    p.add_argument("--exit-code", type=int, default=0, help="exit status after limb's end")
     args = p.parse_args()
     rng = random.Random(args.seed)
     noise = args.noise == "on"
@@ -198,7 +201,7 @@ def main():
     arm = Arm(args.l1, args.l2)
     held = None
     frame_no = 0
-    t = 0.0
+    t = args.t0
     while True:
         frame_no += 1
         (x, z, psi), (ex, ez) = arm.pose()
@@ -240,10 +243,10 @@ def main():
             s.send(json.dumps(message))
         line = s.receive()
         if not line:
-            return 0
+            return args.exit_code
         msg = json.loads(line)
         if "end" in msg:
-            return 0
+            return args.exit_code
         cmd = msg.get("command")
         if cmd is None:
             s.send(json.dumps({"end": "expected a command"}))

@@ -86,6 +86,9 @@ pub struct Operator {
     reached_target_at: Option<f64>,
     last: Option<Command>,
     ends_session: bool,
+    /// Kernel time of the first step the operator saw [s]: the plan's
+    /// settle time counts from it (a robot's clock may start anywhere).
+    started_at: Option<f64>,
 }
 
 impl Operator {
@@ -99,6 +102,7 @@ impl Operator {
             reached_target_at: None,
             last: None,
             ends_session: true,
+            started_at: None,
         }
     }
 
@@ -118,10 +122,12 @@ impl Operator {
     }
 
     /// The request to make at kernel time `now` [s] in `state`, if any
-    /// (each of start and approve is asked once).
+    /// (each of start and approve is asked once; the start once the plan's
+    /// settle time has passed since the first call).
     pub fn request(&mut self, state: StateKind, now: f64) -> Option<Request> {
+        let started_at = *self.started_at.get_or_insert(now);
         match state {
-            StateKind::Grasp if !self.asked_start && now >= self.plan.settle => {
+            StateKind::Grasp if !self.asked_start && now - started_at >= self.plan.settle => {
                 self.asked_start = true;
                 Some(Request::StartEstimation)
             }

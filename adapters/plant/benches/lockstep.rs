@@ -2,7 +2,9 @@
 //! sent, the plant's next frame read and decoded) over a pipe and over TCP
 //! to the smallest plant (`limb-echo-plant`, no physics), to plant.md's arm
 //! in Python (`plants/toy`, when `python3` is there), beside one step of
-//! the embedded reference plant in the same process. Writes the table to
+//! the embedded reference plant in the same process, and to the MuJoCo
+//! MyoArm plant (when `plants/myoarm/setup.sh` has run: its real-time
+//! factor is 1 ms over its median). Writes the table to
 //! `benchmarks/lockstep.md`.
 //!
 //! `cargo bench -p limb-plant --bench lockstep`
@@ -112,6 +114,18 @@ fn main() {
             ),
         ),
     ];
+    let myoarm = concat!(env!("CARGO_MANIFEST_DIR"), "/../../plants/myoarm");
+    let python = format!("{myoarm}/.venv/bin/python");
+    let mut runs = runs;
+    if std::path::Path::new(&python).exists() {
+        runs.push((
+            "MuJoCo MyoArm (plants/myoarm, subject m50; one 1 ms MuJoCo step per frame), pipe",
+            plant(
+                &Endpoint::Command(format!("{python} {myoarm}/plant.py --subject m50")),
+                STEPS / 4,
+            ),
+        ));
+    }
     let reference_median = quantiles(runs[0].1.clone()).map_or(f64::NAN, |q| q.0);
     let mut table = String::from(
         "# Lockstep round trip of `limb-plant/1`\n\n\
@@ -119,7 +133,8 @@ fn main() {
          trip: the command encoded and sent, the plant's next frame read, checked and decoded\n\
          (`PlantRobot::actuate` + `PlantRobot::sense`); the reference plant's row is the same two\n\
          calls on the embedded plant, run side by side in the same process. The kernel's own\n\
-         step is not included (see `benchmarks/step.md`).\n\n\
+         step is not included (see `benchmarks/step.md`). A plant runs faster than real\n\
+         time when its median is below its 1 ms period.\n\n\
          | plant, transport | steps | median [µs] | p99 [µs] | median ÷ reference plant |\n\
          |---|---|---|---|---|\n",
     );
