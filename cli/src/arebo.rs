@@ -102,7 +102,7 @@ pub enum AreboCommand {
         #[arg(long, default_value_t = limb_arebo::held_arm::REFERENCE_HEADING)]
         heading: f64,
         #[command(flatten)]
-        session: SessionArgs,
+        session: Box<SessionArgs>,
     },
 }
 
