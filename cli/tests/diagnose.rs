@@ -300,10 +300,15 @@ fn the_blind_self_check_is_seeded_and_reports_its_figures() {
 /// The report renders in a real browser: headless Chromium (Debian
 /// package `chromium`, installed by `.ci/run` when it can be) parses it
 /// into a DOM with one chart per located signal and takes a screenshot.
-/// Without Chromium the test says so and checks nothing more.
+/// Without Chromium the test fails in CI (which installs it) and elsewhere
+/// says so and checks nothing more.
 #[test]
 fn the_report_renders_in_headless_chromium() {
     let Ok(chromium) = which("chromium") else {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "chromium is not installed in CI: .ci/run installs it"
+        );
         eprintln!(
             "chromium is not installed: report rendering not checked (apt-get install chromium)"
         );
