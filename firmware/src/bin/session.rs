@@ -221,7 +221,11 @@ fn main() -> ! {
     if high_water > STACK_BUDGET {
         fail("the stack outgrew its budget");
     }
-    let worst = meter.instructions[..recorded].iter().copied().max().unwrap_or(0);
+    let worst = meter.instructions[..recorded]
+        .iter()
+        .copied()
+        .max()
+        .unwrap_or(0);
     hprintln!(
         "worst step {} instructions, budget {}",
         worst,
