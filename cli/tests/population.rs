@@ -37,15 +37,17 @@ fn five_hundred_random_arms_stay_inside_the_limits_and_within_1_mm() {
         500,
         "every arm is validated or refused with a reason"
     );
+    // The README's figure: 499 of 500 (one short arm stopped by the
+    // elbow monitor), models at most 0.690 mm off.
     assert!(
-        validated >= 475,
+        validated >= 499,
         "validated only {validated} of 500: {}",
         report["refused"]
     );
     for outcome in report["outcomes"].as_array().unwrap() {
         if let Some(error) = outcome["error"].as_array() {
             for e in error {
-                assert!(e.as_f64().unwrap() <= 1e-3, "{outcome}");
+                assert!(e.as_f64().unwrap() <= 0.75e-3, "{outcome}");
             }
         }
     }

@@ -53,7 +53,10 @@ fn noise_off_reproduces_the_independent_nominal_logs() {
             path * 1e3,
             angle * 1e3
         );
-        assert!(path < 0.5e-3, "case {}: path RMS {path}", i + 1);
-        assert!(angle < 1e-3, "case {}: psi RMS {angle}", i + 1);
+        // plant.md's bar is 0.5 mm RMS; the README states 0.0004 mm and
+        // 0.0003 mrad (measured), so the test holds that figure with a
+        // margin of 2.5-3x: a change that degrades the match shows here.
+        assert!(path < 1e-6, "case {}: path RMS {path}", i + 1);
+        assert!(angle < 1e-6, "case {}: psi RMS {angle}", i + 1);
     }
 }
