@@ -15,7 +15,7 @@
 # The table has one row per target: its latest run (fuzz/logs/<target>.row),
 # so targets run separately, with different limits, share one report.
 #
-# Needs the nightly toolchain only: the targets are built with exactly the
+# Needs the pinned nightly toolchain only (nightly-2026-03-01): the targets are built with exactly the
 # flags of `cargo fuzz build -s none` (cargo-fuzz 0.13), so `cargo fuzz run
 # <target>` uses the same binaries and CI need not install cargo-fuzz.
 # No sanitizer: every target is safe Rust (the crates forbid unsafe), so
@@ -51,14 +51,17 @@ if [ -n "$runs" ] && [ -z "$kernel_runs" ]; then
   kernel_runs=$((runs / 10))
 fi
 
-host=$(rustc +nightly -vV | sed -n 's/^host: //p')
+# The project's one pinned nightly (the one Kani 0.67 pins too); another
+# with FUZZ_TOOLCHAIN.
+toolchain=${FUZZ_TOOLCHAIN:-nightly-2026-03-01}
+host=$(rustc "+$toolchain" -vV | sed -n 's/^host: //p')
 RUSTFLAGS="-Cpasses=sancov-module -Cllvm-args=-sanitizer-coverage-level=4"
 RUSTFLAGS+=" -Cllvm-args=-sanitizer-coverage-inline-8bit-counters"
 RUSTFLAGS+=" -Cllvm-args=-sanitizer-coverage-pc-table"
 RUSTFLAGS+=" -Cllvm-args=-sanitizer-coverage-trace-compares --cfg fuzzing"
 RUSTFLAGS+=" -Cllvm-args=-simplifycfg-branch-fold-threshold=0"
 RUSTFLAGS+=" -Cllvm-args=-sanitizer-coverage-stack-depth -Cdebug-assertions -Ccodegen-units=1"
-RUSTFLAGS="$RUSTFLAGS" cargo +nightly build --locked --target "$host" --release \
+RUSTFLAGS="$RUSTFLAGS" cargo "+$toolchain" build --locked --target "$host" --release \
   --config 'profile.release.debug="line-tables-only"' --bins
 bin="target/$host/release"
 mkdir -p logs
@@ -110,7 +113,7 @@ if [ "$report" != - ]; then
     echo "the kernel; targets and their properties: \`fuzz/README.md\`."
     echo
     echo "Each row is a target's latest run of \`fuzz/run.sh\` (limit in the"
-    echo "row), on $(nproc) cores shared with other builds, $(rustc +nightly --version),"
+    echo "row), on $(nproc) cores shared with other builds, $(rustc "+$toolchain" --version),"
     echo "libFuzzer of libfuzzer-sys, cargo-fuzz's flags without a sanitizer"
     echo "(release with debug assertions and overflow checks). Executions and exec/s are libFuzzer's"
     echo "final figures; cov is the number of instrumented edges reached, ft"
