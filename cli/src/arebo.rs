@@ -262,7 +262,7 @@ fn kernel_session(
     let record = robot.record();
     let outcome = ended.outcome.as_ref().ok();
     let summary = json!({
-        "kernel_state": format!("{:?}", ended.kernel.state().kind()),
+        "kernel_state": ended.kernel.state().kind().title(),
         "kernel_steps": outcome.map(|o| o.steps),
         "stale_steps": outcome.map(|o| o.stale_steps),
         "frames": record.frames,
@@ -309,7 +309,7 @@ fn stop_json(cause: StopCause) -> serde_json::Value {
         StopCause::PortLost => json!({ "cause": "port_lost" }),
         StopCause::Violation(v) => json!({
             "cause": "violation",
-            "limit": format!("{:?}", v.limit),
+            "limit": v.limit.name(),
             "code": v.limit.code(),
             "value": v.value,
             "bound": v.bound,
@@ -322,7 +322,7 @@ fn stop_json(cause: StopCause) -> serde_json::Value {
 fn stopped(mut summary: serde_json::Value, cause: StopCause) -> Result<(), CliError> {
     summary["stop"] = stop_json(cause);
     print_json(&summary)?;
-    Err(CliError::SafetyStop(format!("{cause:?}")))
+    Err(CliError::SafetyStop(cause.to_string()))
 }
 
 /// Calibrates on `session`; a safe stop is printed and exits 3.

@@ -48,6 +48,8 @@ struct EstimateReport {
     validated: bool,
     /// If not, which check refused it, in words.
     rejection: Option<String>,
+    /// The refusing check's stable name (`limb_kernel::vocabulary`).
+    rejection_check: Option<&'static str>,
 }
 
 /// Runs `limb estimate`.
@@ -67,7 +69,7 @@ pub fn run(log: &Path, method: MethodArg, json: bool) -> Result<(), CliError> {
     }
     let estimate = estimate_arm(&path, method.into()).map_err(|error| {
         CliError::BadInput(format!(
-            "{}: cannot estimate the arm: {error:?}",
+            "{}: cannot estimate the arm: {error}",
             log.display()
         ))
     })?;
@@ -76,8 +78,7 @@ pub fn run(log: &Path, method: MethodArg, json: bool) -> Result<(), CliError> {
         grasp_at_rest(&path),
         &ValidationLimits::default(),
     )
-    .err()
-    .map(|rejection| format!("{rejection:?}"));
+    .err();
     let report = EstimateReport {
         l1: estimate.upper_arm_length,
         l2: estimate.forearm_length,
@@ -87,13 +88,14 @@ pub fn run(log: &Path, method: MethodArg, json: bool) -> Result<(), CliError> {
         samples: path.len(),
         evidence: estimate.evidence,
         validated: rejection.is_none(),
-        rejection,
+        rejection: rejection.map(|r| r.to_string()),
+        rejection_check: rejection.map(|r| r.name()),
     };
     if json {
         return print_json(&report);
     }
     emit(&format!(
-        "method    {:?}\nl1        {:.4} m (upper arm)\nl2        {:.4} m (forearm, elbow to grasp)\n\
+        "method    {}\nl1        {:.4} m (upper arm)\nl2        {:.4} m (forearm, elbow to grasp)\n\
          elbow     ({:.4}, {:.4}) m, frame S, t = 0\nshoulder  ({:.4}, {:.4}) m, frame S\nsamples   {}\n\
          outliers  {} (isolated samples left out of the fits)\nvalidator {}\n",
         report.method,

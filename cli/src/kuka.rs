@@ -158,9 +158,9 @@ fn run_client(options: &ClientOptions<'_>) -> Result<(), CliError> {
     let record = robot.record();
     print_json(&json!({
         "fri_version": version.to_string(),
-        "overlay": format!("{overlay:?}"),
+        "overlay": overlay.name(),
         "client": counts_json(&record.client),
-        "kernel_state": format!("{:?}", kernel.state().kind()),
+        "kernel_state": kernel.state().kind().title(),
         "kernel_steps": outcome.steps,
         "stale_steps": outcome.stale_steps,
         "missing_measurements": record.missing_measurements,

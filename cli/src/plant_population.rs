@@ -93,6 +93,26 @@ pub fn refusal(report: &SessionReport) -> Option<String> {
         .map(|line| line.what.clone())
 }
 
+/// The stop that ended Estimate, in the kernel's vocabulary: the stop
+/// reason's name and what it names (`monitor: elbow_flexion`,
+/// `model_rejected: geometry_inconsistent`), if Estimate was stopped.
+pub fn refusal_reason(report: &SessionReport) -> Option<String> {
+    let line = report
+        .events
+        .iter()
+        .find(|line| line.what.starts_with("Estimate → SafeStop"))?;
+    let event = serde_json::to_value(&line.event).ok()?;
+    let reason = &event["reason"];
+    let name = reason["name"].as_str()?;
+    let detail = reason["violation"]["limit_name"]
+        .as_str()
+        .or_else(|| reason["cause"]["name"].as_str());
+    Some(match detail {
+        Some(detail) => format!("{name}: {detail}"),
+        None => name.to_string(),
+    })
+}
+
 impl SubjectOutcome {
     fn of(
         name: String,
@@ -326,7 +346,7 @@ pub fn table(report: &PlantPopulationReport) -> String {
             (None, false, None) => "not reached".to_string(),
         };
         text.push_str(&format!(
-            "| {} | {} | {estimate} | {} | {} | {} | {} | {:.1} | {:.1} | {:.1} | {:?} |\n",
+            "| {} | {} | {estimate} | {} | {} | {} | {} | {:.1} | {:.1} | {:.1} | {} |\n",
             o.name,
             o.group.as_deref().unwrap_or("–"),
             mm(o.error_l1),

@@ -50,6 +50,9 @@ pub struct ArmOutcome {
     pub error: Option<[f64; 2]>,
     /// Why the kernel stopped instead of validating, in words.
     pub refusal: Option<String>,
+    /// The same in the kernel's vocabulary (`stop reason: what`, e.g.
+    /// `monitor: elbow_flexion`): the key of `refused`.
+    pub refusal_reason: Option<String>,
     /// Time from the start of the estimation to Validated [s].
     pub estimate_duration: Option<f64>,
     /// True when the whole session (manipulation included) completed.
@@ -146,6 +149,7 @@ fn run_arm(l1: f64, l2: f64, seed: u64, config: &KernelConfig) -> Result<ArmOutc
         .zip(time_of("Grasp → Estimate"))
         .map(|(end, start)| end - start);
     let refusal = crate::plant_population::refusal(&report);
+    let refusal_reason = crate::plant_population::refusal_reason(&report);
     Ok(ArmOutcome {
         l1,
         l2,
@@ -157,6 +161,7 @@ fn run_arm(l1: f64, l2: f64, seed: u64, config: &KernelConfig) -> Result<ArmOutc
             .as_ref()
             .and_then(|m| Some([m.error_l1?.abs(), m.error_l2?.abs()])),
         refusal,
+        refusal_reason,
         estimate_duration,
         completed: report.completed && report.final_state == StateKind::Validated,
     })
@@ -199,14 +204,8 @@ pub fn population(arms: usize, seed: u64) -> Result<PopulationReport, CliError> 
     }
     let errors: Vec<[f64; 2]> = outcomes.iter().filter_map(|o| o.error).collect();
     let mut refused = BTreeMap::new();
-    for reason in outcomes.iter().filter_map(|o| o.refusal.as_ref()) {
-        let key = reason
-            .split('(')
-            .nth(1)
-            .unwrap_or(reason)
-            .trim()
-            .to_string();
-        *refused.entry(key).or_insert(0) += 1;
+    for reason in outcomes.iter().filter_map(|o| o.refusal_reason.as_ref()) {
+        *refused.entry(reason.clone()).or_insert(0) += 1;
     }
     let max_of = |f: fn(&ArmOutcome) -> f64| outcomes.iter().map(f).fold(0.0, f64::max);
     Ok(PopulationReport {

@@ -236,7 +236,7 @@ impl<R: TrueJoints + ?Sized> Observer<R> for Recorder {
         };
         let extremes = self
             .joint_extremes
-            .entry(format!("{state:?}").to_lowercase())
+            .entry(state.name().to_string())
             .or_default();
         extremes.max_hyperextension = extremes.max_hyperextension.max(-q2);
         extremes.max_shoulder_elevation = extremes.max_shoulder_elevation.max(q1);
@@ -421,15 +421,15 @@ pub fn human(report: &SessionReport, header: &str) -> String {
     let st = &report.step_time;
     let _ = writeln!(
         out,
-        "step time (wall): median {:.2} µs, p99.9 {:.2} µs, max {:.1} µs in {:?}",
+        "step time (wall): median {:.2} µs, p99.9 {:.2} µs, max {:.1} µs in {}",
         st.median_s * 1e6,
         st.p999_s * 1e6,
         st.max_s * 1e6,
-        st.max_state,
+        st.max_state.map_or("no step", |s| s.title()),
     );
     let _ = writeln!(
         out,
-        "final state: {:?} after {} kernel steps ({} with saturation); session {}",
+        "final state: {} after {} kernel steps ({} with saturation); session {}",
         report.final_state,
         report.steps,
         report.saturated_commands,

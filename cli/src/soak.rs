@@ -373,14 +373,14 @@ impl LogRows {
     }
 }
 
-/// The words of a stop's cause: a monitor limit (`StaleSensor`), `request
-/// Stop`, or the stop reason.
+/// The words of a stop's cause in the kernel's vocabulary: a monitor
+/// limit (`stale_sensor`), `request stop`, or the stop reason.
 fn stop_name(cause: &Cause) -> String {
     match cause {
-        Cause::Stop(StopReason::Monitor(violation)) => format!("{:?}", violation.limit),
-        Cause::Request(Request::Stop) => "request Stop".into(),
-        Cause::Stop(reason) => format!("{reason:?}"),
-        other => format!("{other:?}"),
+        Cause::Stop(StopReason::Monitor(violation)) => violation.limit.name().into(),
+        Cause::Request(Request::Stop) => "request stop".into(),
+        Cause::Stop(reason) => reason.to_string(),
+        other => other.to_string(),
     }
 }
 

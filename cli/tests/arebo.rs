@@ -1,5 +1,7 @@
 //! `limb arebo` against a pseudo-terminal.
 
+mod common;
+
 use limb_arebo::link;
 use serde_json::Value;
 use std::io::{BufRead, BufReader};
@@ -23,6 +25,8 @@ fn a_safe_stop_exits_3_with_the_same_json_in_calibrate_and_run() {
             .unwrap();
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(3), "{command:?}: {stderr}");
+        common::assert_no_debug_shape("limb arebo", &stderr);
+        common::assert_no_debug_shape("limb arebo", &String::from_utf8_lossy(&out.stdout));
         let json: Value = serde_json::from_slice(&out.stdout).expect("one JSON document");
         assert_eq!(json["stop"]["cause"], "violation", "{json}");
         assert!(json["stop"]["code"].is_u64(), "{json}");
@@ -37,6 +41,7 @@ fn json(output: &std::process::Output) -> Value {
         "{}",
         String::from_utf8_lossy(&output.stderr)
     );
+    common::assert_no_debug_shape("limb arebo", &String::from_utf8_lossy(&output.stdout));
     serde_json::from_slice(&output.stdout).unwrap()
 }
 

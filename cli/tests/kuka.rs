@@ -1,6 +1,8 @@
 //! `limb kuka run` (client with the kernel) against `limb kuka
 //! sim-controller` (simulated controller), two processes over loopback UDP.
 
+mod common;
+
 use serde_json::Value;
 use std::net::UdpSocket;
 use std::process::{Command, Stdio};
@@ -11,6 +13,7 @@ fn json(output: std::process::Output) -> Value {
         "{}",
         String::from_utf8_lossy(&output.stderr)
     );
+    common::assert_no_debug_shape("limb kuka", &String::from_utf8_lossy(&output.stdout));
     serde_json::from_slice(&output.stdout).unwrap()
 }
 
@@ -89,14 +92,14 @@ fn run_and_sim_controller_close_the_loop_over_udp() {
     assert_eq!(client["client"]["duplicates"], 10, "{client}");
     assert_eq!(
         client["events"][0]["what"],
-        "Grasp → Estimate (request StartEstimation)"
+        "Grasp → Estimate (request start_estimation)"
     );
     // The controller went silent after its 1500 cycles (1.5 s of robot
     // time): the kernel's watchdog stopped it then, not before.
     assert_eq!(client["kernel_state"], "SafeStop", "{client}");
     let stop = &client["events"][1];
     assert!(
-        stop["what"].as_str().unwrap().contains("StaleSensor"),
+        stop["what"].as_str().unwrap().contains("stale_sensor"),
         "{stop}"
     );
     assert!(stop["time"].as_f64().unwrap() >= 1.5, "{stop}");

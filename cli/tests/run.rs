@@ -124,7 +124,7 @@ fn a_force_limit_below_the_lift_force_stops_with_the_reason() {
     let (code, out, _) = limb(&["run", "--max-force", "20"]);
     assert_eq!(code, 0);
     assert!(out.contains("Estimate → SafeStop"), "{out}");
-    assert!(out.contains("ForceMagnitude"), "{out}");
+    assert!(out.contains("force_magnitude"), "{out}");
     assert!(out.contains("final state: SafeStop"), "{out}");
 }
 

@@ -77,7 +77,7 @@ fn a_watchdog_stop_in_a_silence_has_its_step_log_row() {
     let out = soak_session("9", &log);
     let json = common::json_of(&out);
     let session = &json["figures"]["sessions_detail"][0];
-    assert_eq!(session["stop"], "StaleSensor", "{session}");
+    assert_eq!(session["stop"], "stale_sensor", "{session}");
     let frames = std::fs::read_to_string(&log).unwrap();
     let steps = std::fs::read_to_string(&steps_log).unwrap();
     std::fs::remove_file(&log).unwrap();

@@ -192,8 +192,9 @@ fn starts() -> &'static Starts {
     })
 }
 
-/// The safety limit fields an [`Action::UpdateLimit`] can change.
-const LIMIT_FIELDS: usize = 15;
+/// The safety limit fields an [`Action::UpdateLimit`] can change: every
+/// number of `SafetyLimits` (`workspace_z.low` was missing until issue 38).
+const LIMIT_FIELDS: usize = 16;
 
 fn with_limit(config: &KernelConfig, field: u8, value: Value) -> SafetyLimits {
     let mut l = config.limits;
@@ -212,7 +213,8 @@ fn with_limit(config: &KernelConfig, field: u8, value: Value) -> SafetyLimits {
         11 => &mut l.workspace_x.low,
         12 => &mut l.workspace_z.high,
         13 => &mut l.max_sensor_age,
-        _ => &mut l.workspace_x.high,
+        14 => &mut l.workspace_x.high,
+        _ => &mut l.workspace_z.low,
     };
     *slot = value.around(*slot, *slot * 0.05);
     l

@@ -78,6 +78,7 @@ pub mod path;
 pub mod state;
 pub mod trace;
 pub mod validate;
+pub mod vocabulary;
 
 pub use command::{Command, CommandMode};
 pub use config::KernelConfig;

@@ -101,7 +101,7 @@ impl fmt::Display for Digest<'_> {
         }
         writeln!(
             f,
-            "steps {} saturated {} final {:?} completed {}",
+            "steps {} saturated {} final {} completed {}",
             o.steps, o.saturated_commands, o.final_state, o.completed
         )?;
         write!(f, "command-hash {:016x}", o.command_hash)

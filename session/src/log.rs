@@ -274,7 +274,7 @@ impl<R: ?Sized, W: Write> Observer<R> for StepLog<W> {
                 for value in numbers {
                     push(line, value);
                 }
-                let _ = write!(line, ",{:?},{:?}", command.state, command.mode);
+                let _ = write!(line, ",{},{}", command.state, command.mode);
                 for value in (0..3).map(|i| set_point.map(|p| p[i])) {
                     push(line, value);
                 }

@@ -291,7 +291,7 @@ impl<R: Logged + ?Sized, W: Write + Seek> Observer<R> for McapLog<W> {
         field(&mut text, "stale", Some(f64::from(u8::from(step.stale))));
         let _ = write!(
             text,
-            ",\"state\":\"{:?}\",\"mode\":\"{:?}\"",
+            ",\"state\":\"{}\",\"mode\":\"{}\"",
             command.state, command.mode
         );
         for (i, name) in ["xd", "zd", "psid"].iter().enumerate() {

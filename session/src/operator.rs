@@ -17,7 +17,7 @@ use crate::supervisor::Supervisor;
 use core::fmt;
 use limb_kernel::arm::JointAngles;
 use limb_kernel::geometry::Point;
-use limb_kernel::trace::{Cause, Event, TraceEvent};
+use limb_kernel::trace::{Event, TraceEvent};
 use limb_kernel::validate::ValidatedArm;
 use limb_kernel::{Command, Kernel, PathSample, Request, StateKind};
 
@@ -189,26 +189,8 @@ pub struct Described<'a>(pub &'a TraceEvent);
 
 impl fmt::Display for Described<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self.0.event {
-            Event::Transition { from, to, cause } => {
-                write!(f, "{from:?} → {to:?} (")?;
-                match cause {
-                    Cause::Request(request) => write!(f, "request {request:?}")?,
-                    Cause::ModelValidated => f.write_str("model validated")?,
-                    Cause::Stop(reason) => write!(f, "stop: {reason:?}")?,
-                }
-                f.write_str(")")
-            }
-            Event::Refused(refusal) => write!(
-                f,
-                "refused {:?} in {:?}: {:?}",
-                refusal.request, refusal.state, refusal.reason
-            ),
-            Event::LiftEnded(reason) => write!(
-                f,
-                "lift ended: {reason:?}; holding while the estimate is refined"
-            ),
-        }
+        // The kernel's vocabulary (`limb_kernel::vocabulary`).
+        fmt::Display::fmt(&self.0.event, f)
     }
 }
 

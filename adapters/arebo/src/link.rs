@@ -107,6 +107,15 @@ pub enum StopCause {
     PortLost,
 }
 
+impl core::fmt::Display for StopCause {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            StopCause::Violation(v) => write!(f, "violation: {v}"),
+            StopCause::PortLost => f.write_str("port_lost"),
+        }
+    }
+}
+
 /// Host session state.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum SessionState {

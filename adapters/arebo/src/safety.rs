@@ -52,6 +52,33 @@ impl AreboLimit {
             AreboLimit::ControlType => 105,
         }
     }
+
+    /// Stable snake_case name (the kernel's for the kernel's limits,
+    /// `limb_kernel::vocabulary`).
+    pub const fn name(self) -> &'static str {
+        match self {
+            AreboLimit::Kernel(limit) => limit.name(),
+            AreboLimit::Flexion => "flexion",
+            AreboLimit::Abduction => "abduction",
+            AreboLimit::DeviceHeartbeatMissing => "device_heartbeat_missing",
+            AreboLimit::TorqueSensorFault => "torque_sensor_fault",
+            AreboLimit::UnknownDeviceError => "unknown_device_error",
+            AreboLimit::ControlType => "control_type",
+        }
+    }
+}
+
+impl core::fmt::Display for AreboViolation {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(
+            f,
+            "{} (code {}) {} beyond {}",
+            self.limit.name(),
+            self.limit.code(),
+            self.value,
+            self.bound
+        )
+    }
 }
 
 /// A crossed limit with the measured value and the bound.

@@ -150,7 +150,7 @@ fn a_frozen_device_clock_is_a_stale_sensor_for_the_kernel() {
     let (outcome, acted_at, events) = session(faults, move || switch.set(DeviceFault::FrozenClock));
     let outcome = outcome.unwrap();
     assert_eq!(outcome.final_state, StateKind::SafeStop);
-    stopped_after(&events, acted_at, "StaleSensor");
+    stopped_after(&events, acted_at, "stale_sensor");
 }
 
 /// REQ-ADP-002: The host stalls 0.3 s (the device keeps streaming into the pty): the
@@ -163,7 +163,7 @@ fn a_backlog_after_a_host_stall_is_a_stale_sensor_for_the_kernel() {
     });
     let outcome = outcome.unwrap();
     assert_eq!(outcome.final_state, StateKind::SafeStop);
-    stopped_after(&events, acted_at, "StaleSensor");
+    stopped_after(&events, acted_at, "stale_sensor");
 }
 
 /// The scripted operator's whole session on the held arm: Grasp →

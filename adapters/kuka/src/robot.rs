@@ -59,6 +59,16 @@ pub enum Overlay {
     Wrench,
 }
 
+impl Overlay {
+    /// Stable name, as `limb kuka run --overlay` spells it.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Overlay::JointPosition => "joint-position",
+            Overlay::Wrench => "wrench",
+        }
+    }
+}
+
 /// What the translation counted.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct FriRecord {

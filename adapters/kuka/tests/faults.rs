@@ -94,7 +94,7 @@ fn random_loss_is_ridden_through_with_gaps_counted() {
 fn loss_burst_trips_the_watchdog_then_reenters_without_jump() {
     let run = run(FriVersion::V2_5, "burst-loss@600:50", 1200);
     assert!(run.outcome.stale_steps > 0);
-    assert_stopped_and_reentered(&run, "StaleSensor");
+    assert_stopped_and_reentered(&run, "stale_sensor");
     assert!(run.sim.stats().overlay_aborts >= 1);
 }
 
@@ -105,7 +105,7 @@ fn delayed_datagrams_are_late_replies_then_stop() {
     assert!(stats.stray_replies > 0);
     assert!(run.robot.record().client.stale_datagrams > 0);
     assert!(stats.overlay_aborts >= 1);
-    assert_stopped_and_reentered(&run, "request Stop");
+    assert_stopped_and_reentered(&run, "request stop");
 }
 
 #[test]
@@ -140,7 +140,7 @@ fn counter_jump_is_a_gap_and_handled() {
 #[test]
 fn poor_quality_aborts_the_overlay_and_stops_the_kernel() {
     let run = run(FriVersion::V1_15, "poor-quality@600:30", 1000);
-    assert_stopped_and_reentered(&run, "request Stop");
+    assert_stopped_and_reentered(&run, "request stop");
     assert_eq!(run.sim.stats().overlay_aborts, 1);
 }
 
@@ -152,7 +152,7 @@ fn drop_to_idle_is_silent_then_reenters_without_jump() {
     assert_eq!(stats.state_cycles[SessionState::Idle as usize], 50);
     assert_eq!(stats.stray_replies, 0, "the client answered in IDLE");
     assert!(run.outcome.unfollowed_stops >= 1);
-    assert_stopped_and_reentered(&run, "request Stop");
+    assert_stopped_and_reentered(&run, "request stop");
 }
 
 #[test]
@@ -177,7 +177,7 @@ fn wrong_crc_is_rejected_as_a_lost_datagram() {
 #[test]
 fn wrench_overlay_loss_burst_trips_the_watchdog_then_reenters() {
     let run = run_with_overlay(FriVersion::V2_7, Overlay::Wrench, "burst-loss@600:50", 1200);
-    assert!(stopped_because(&run, "StaleSensor"));
+    assert!(stopped_because(&run, "stale_sensor"));
     assert_eq!(kernel_state(&run), StateKind::SafeStop);
     assert_eq!(run.sim.stats().commanding_entries, 2);
     assert_eq!(run.sim.state(), SessionState::CommandingActive);

@@ -20,7 +20,7 @@ use limb_kernel::estimation::{CircleFitError, EstimateError};
 use limb_kernel::geometry::{Point, Pose, PoseRate, Wrench};
 use limb_kernel::impedance::Saturation;
 use limb_kernel::lift::LiftEnd;
-use limb_kernel::monitor::{Limit, Violation};
+use limb_kernel::monitor::Violation;
 use limb_kernel::motion::{PlanError, SetPoint};
 use limb_kernel::state::TargetError;
 use limb_kernel::trace::{Cause as KernelCause, Event, TraceEvent};
@@ -126,32 +126,11 @@ pub struct ViolationReport {
     pub bound: Option<f64>,
 }
 
-/// The wire name of a monitor limit.
-pub fn limit_name(limit: Limit) -> &'static str {
-    match limit {
-        Limit::NonFiniteSensor => "non_finite_sensor",
-        Limit::ClockFault => "clock_fault",
-        Limit::SensorTimeReversed => "sensor_time_reversed",
-        Limit::StaleSensor => "stale_sensor",
-        Limit::ForceMagnitude => "force_magnitude",
-        Limit::Torque => "torque",
-        Limit::ForceRate => "force_rate",
-        Limit::Speed => "speed",
-        Limit::GraspBelowTable => "grasp_below_table",
-        Limit::ElbowBelowTable => "elbow_below_table",
-        Limit::WorkspaceX => "workspace_x",
-        Limit::WorkspaceZ => "workspace_z",
-        Limit::ShoulderElevation => "shoulder_elevation",
-        Limit::ElbowFlexion => "elbow_flexion",
-        Limit::ModelMismatch => "model_mismatch",
-    }
-}
-
 impl From<Violation> for ViolationReport {
     fn from(v: Violation) -> Self {
         Self {
             limit: v.limit.code(),
-            limit_name: limit_name(v.limit).to_owned(),
+            limit_name: v.limit.name().to_owned(),
             value: finite(v.value),
             bound: finite(v.bound),
         }
@@ -201,75 +180,60 @@ impl Fault {
 
 impl From<PlanError> for Fault {
     fn from(e: PlanError) -> Self {
-        let name = match e {
-            PlanError::NonFinite => "non_finite",
-            PlanError::NonPositiveSpeed => "non_positive_speed",
-        };
-        Fault::named(e.code(), name)
+        Fault::named(e.code(), e.name())
     }
 }
 
 impl From<TargetError> for Fault {
     fn from(e: TargetError) -> Self {
-        let fault = |name| Fault::named(e.code(), name);
+        let fault = Fault::named(e.code(), e.name());
         match e {
-            TargetError::JointLimits(v) => fault("joint_limits").with_violation(v),
-            TargetError::Workspace(v) => fault("workspace").with_violation(v),
-            TargetError::Plan(p) => fault("plan").caused_by(p.into()),
+            TargetError::JointLimits(v) | TargetError::Workspace(v) => fault.with_violation(v),
+            TargetError::Plan(p) => fault.caused_by(p.into()),
         }
     }
 }
 
 impl From<RefusalReason> for Fault {
     fn from(r: RefusalReason) -> Self {
-        let fault = |name| Fault::named(r.code(), name);
+        let fault = Fault::named(r.code(), r.name());
         match r {
-            RefusalReason::NotAllowedInState => fault("not_allowed_in_state"),
-            RefusalReason::NoFreshMeasurement => fault("no_fresh_measurement"),
-            RefusalReason::InvalidTime => fault("invalid_time"),
-            RefusalReason::Target(t) => fault("target").caused_by(t.into()),
-            RefusalReason::Plan(p) => fault("plan").caused_by(p.into()),
+            RefusalReason::Target(t) => fault.caused_by(t.into()),
+            RefusalReason::Plan(p) => fault.caused_by(p.into()),
+            RefusalReason::NotAllowedInState
+            | RefusalReason::NoFreshMeasurement
+            | RefusalReason::InvalidTime => fault,
         }
     }
 }
 
-/// The circle fits' errors have no kernel code; theirs is here.
-fn circle_fault(e: CircleFitError) -> Fault {
-    match e {
-        CircleFitError::TooFewPoints => Fault::named(e.code(), "too_few_points"),
-        CircleFitError::TooManyPoints => Fault::named(e.code(), "too_many_points"),
-        CircleFitError::Degenerate => Fault::named(e.code(), "degenerate"),
-        CircleFitError::NonFinite => Fault::named(e.code(), "non_finite"),
+impl From<CircleFitError> for Fault {
+    fn from(e: CircleFitError) -> Self {
+        Fault::named(e.code(), e.name())
     }
 }
 
 impl From<EstimateError> for Fault {
     fn from(e: EstimateError) -> Self {
-        let fault = |name| Fault::named(e.code(), name);
+        let fault = Fault::named(e.code(), e.name());
         match e {
-            EstimateError::PathTooLong => fault("path_too_long"),
-            EstimateError::NonFiniteSample => fault("non_finite_sample"),
-            EstimateError::ForearmPhaseTooShort => fault("forearm_phase_too_short"),
-            EstimateError::UpperArmPhaseTooShort => fault("upper_arm_phase_too_short"),
-            EstimateError::ForearmFit(c) => fault("forearm_fit").caused_by(circle_fault(c)),
-            EstimateError::UpperArmFit(c) => fault("upper_arm_fit").caused_by(circle_fault(c)),
+            EstimateError::ForearmFit(c) | EstimateError::UpperArmFit(c) => {
+                fault.caused_by(c.into())
+            }
+            _ => fault,
         }
     }
 }
 
 impl From<StopReason> for Fault {
     fn from(r: StopReason) -> Self {
-        let fault = |name| Fault::named(r.code(), name);
+        let fault = Fault::named(r.code(), r.name());
         match r {
-            StopReason::Monitor(v) => fault("monitor").with_violation(v),
-            StopReason::Operator => fault("operator"),
-            StopReason::EstimationFailed(e) => fault("estimation_failed").caused_by(e.into()),
-            StopReason::ModelRejected(rejection) => {
-                fault("model_rejected").caused_by(rejection.into())
-            }
-            StopReason::PathBufferFull => fault("path_buffer_full"),
-            StopReason::PlanFailed(p) => fault("plan_failed").caused_by(p.into()),
-            StopReason::NonFiniteCommand => fault("non_finite_command"),
+            StopReason::Monitor(v) => fault.with_violation(v),
+            StopReason::EstimationFailed(e) => fault.caused_by(e.into()),
+            StopReason::ModelRejected(rejection) => fault.caused_by(rejection.into()),
+            StopReason::PlanFailed(p) => fault.caused_by(p.into()),
+            _ => fault,
         }
     }
 }
@@ -287,20 +251,7 @@ impl From<ConfigError> for Fault {
 /// as informative detail.
 impl From<Rejection> for Fault {
     fn from(r: Rejection) -> Self {
-        let name = match r {
-            Rejection::NonFinite => "non_finite",
-            Rejection::UpperArmLengthOutOfRange(_) => "upper_arm_length_out_of_range",
-            Rejection::ForearmLengthOutOfRange(_) => "forearm_length_out_of_range",
-            Rejection::ForearmArcTooShort(_) => "forearm_arc_too_short",
-            Rejection::UpperArmArcTooShort(_) => "upper_arm_arc_too_short",
-            Rejection::ForearmResidualTooLarge(_) => "forearm_residual_too_large",
-            Rejection::UpperArmResidualTooLarge(_) => "upper_arm_residual_too_large",
-            Rejection::MethodsDisagree(_) => "methods_disagree",
-            Rejection::NoIndependentMethod => "no_independent_method",
-            Rejection::GeometryInconsistent(_) => "geometry_inconsistent",
-            Rejection::ShoulderOffTable(_) => "shoulder_off_table",
-        };
-        let mut fault = Fault::named(r.code(), name);
+        let mut fault = Fault::named(r.code(), r.name());
         fault.detail = r.value().map(|v| format!("{v}"));
         fault
     }
@@ -401,7 +352,7 @@ impl From<LiftEnd> for LiftEndReport {
             LiftEnd::ArcReached => LiftEndReport::ArcReached,
             LiftEnd::JointMargin(limit) => LiftEndReport::JointMargin {
                 limit: limit.code(),
-                limit_name: limit_name(limit).to_owned(),
+                limit_name: limit.name().to_owned(),
             },
             LiftEnd::MotionComplete => LiftEndReport::MotionComplete,
         }
@@ -612,6 +563,46 @@ impl From<Command> for CommandReport {
             set_point: c.set_point.map(Into::into),
             wrench: c.wrench.into(),
             saturation: c.saturation.into(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod vocabulary {
+    use super::*;
+    use limb_kernel::arm::JointAngles;
+
+    /// The wire's state and request names are the kernel's vocabulary
+    /// (`StateKind::name`, `Request::name`), for every variant.
+    #[test]
+    fn states_and_requests_are_spelled_as_the_kernel_names_them() {
+        let states = [
+            StateKind::Grasp,
+            StateKind::Estimate,
+            StateKind::Validated,
+            StateKind::Manipulate,
+            StateKind::SafeStop,
+        ];
+        for kind in states {
+            assert_eq!(
+                serde_json::to_value(State::from(kind)).unwrap(),
+                kind.name()
+            );
+        }
+        let target = JointAngles {
+            shoulder_elevation: 0.5,
+            elbow_flexion: 0.5,
+        };
+        let requests = [
+            Request::StartEstimation,
+            Request::ApproveManipulation(target),
+            Request::FinishManipulation,
+            Request::Stop,
+            Request::Reset,
+        ];
+        for request in requests {
+            let wire = serde_json::to_value(RequestKind::from(request)).unwrap();
+            assert_eq!(wire, request.name());
         }
     }
 }

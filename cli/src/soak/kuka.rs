@@ -8,7 +8,7 @@
 //! [`CASES`] (or none) and a controller cycle to inject it at, anywhere in
 //! a whole session's length; a fault ends the session in its named stop
 //! (the limb-kuka README's fault table), or is ridden through. Faults that
-//! stop the kernel only because the robot stops following ("request Stop")
+//! stop the kernel only because the robot stops following ("request stop")
 //! do so only while the kernel moves the arm; injected in Grasp or
 //! Validated they may be ridden through. A fault ridden through while the
 //! arm is still may, while it moves, make the robot miss commands and then
@@ -56,10 +56,21 @@ enum Expect {
     RideThrough,
     /// SafeStop with this cause, whatever the kernel was doing.
     Stop(&'static str),
-    /// SafeStop by `request Stop` (the robot stopped following) when the
+    /// SafeStop by `request stop` (the robot stopped following) when the
     /// kernel was moving the arm at injection; otherwise either that or
     /// riding through.
     StopWhileMoving,
+}
+
+impl Expect {
+    /// The expectation in words (JSON and the report).
+    fn name(self) -> String {
+        match self {
+            Expect::RideThrough => "ride_through".into(),
+            Expect::Stop(cause) => format!("stop: {cause}"),
+            Expect::StopWhileMoving => "stop_while_moving".into(),
+        }
+    }
 }
 
 /// One fault the soak injects.
@@ -69,7 +80,7 @@ struct Case {
     expect: Expect,
 }
 
-const STALE: Expect = Expect::Stop("StaleSensor");
+const STALE: Expect = Expect::Stop("stale_sensor");
 const UNFOLLOWED: Expect = Expect::StopWhileMoving;
 
 /// The faults, with the windows of the limb-kuka README's fault table.
@@ -199,6 +210,18 @@ enum Verdict {
     Otherwise,
 }
 
+impl Verdict {
+    /// Stable snake_case name (JSON and the report).
+    const fn name(self) -> &'static str {
+        match self {
+            Verdict::AsNamed => "as_named",
+            Verdict::StoppedByItsTransient => "stopped_by_its_transient",
+            Verdict::NotReached => "not_reached",
+            Verdict::Otherwise => "otherwise",
+        }
+    }
+}
+
 impl Session {
     fn verdict(&self) -> Option<Verdict> {
         let fault = self.fault?;
@@ -214,7 +237,7 @@ impl Session {
         if expect == Expect::RideThrough
             && moving
             && stopped_in_window
-            && self.stop.as_deref() == Some("ForceRate")
+            && self.stop.as_deref() == Some("force_rate")
         {
             return Some(Verdict::StoppedByItsTransient);
         }
@@ -222,7 +245,7 @@ impl Session {
             Expect::RideThrough => !stopped_in_window,
             Expect::Stop(name) => self.stop.as_deref() == Some(name),
             Expect::StopWhileMoving => {
-                let asked = self.stop.as_deref() == Some("request Stop");
+                let asked = self.stop.as_deref() == Some("request stop");
                 asked || (!moving && !stopped_in_window)
             }
         };
@@ -237,12 +260,12 @@ impl Session {
     fn json(&self) -> Value {
         let mut record = json!({
             "fault": self.fault.map(|f| f.to_string()),
-            "expect": self.expect.map(|e| format!("{e:?}")),
-            "state_at_fault": self.state_at_fault.map(|s| format!("{s:?}")),
+            "expect": self.expect.map(Expect::name),
+            "state_at_fault": self.state_at_fault.map(|s| s.title()),
             "ended_at_cycle": self.ended_at,
             "stop": self.stop,
             "completed": self.completed,
-            "verdict": self.verdict().map(|v| format!("{v:?}")),
+            "verdict": self.verdict().map(Verdict::name),
             "log_rows": self.rows.frames,
             "step_log_rows": self.rows.steps,
             "kernel_steps": self.steps,
@@ -449,7 +472,7 @@ impl Judge {
         *entry.entry(format!("ended: {outcome}")).or_default() += 1;
         let verdict = s.verdict();
         if let Some(verdict) = verdict {
-            *entry.entry(format!("{verdict:?}")).or_default() += 1;
+            *entry.entry(verdict.name().to_string()).or_default() += 1;
         }
         // A stop the fault did not make: before its window, or without one.
         let unmade = matches!(verdict, None | Some(Verdict::NotReached));
@@ -466,9 +489,9 @@ impl Judge {
                 *self.machine_caused.entry(stop.clone()).or_default() += 1;
             } else {
                 let injected = s.state_at_fault.map_or("not injected".into(), |state| {
-                    format!("injected in {state:?}")
+                    format!("injected in {state}")
                 });
-                let expected = s.expect.map_or("no stop".into(), |e| format!("{e:?}"));
+                let expected = s.expect.map_or("no stop".into(), Expect::name);
                 self.ledger.lose(format!(
                     "session {index}: fault {name} ({injected}) ended in {outcome}, expected {expected}"
                 ));
@@ -575,12 +598,12 @@ mod tests {
                 soak.figures["stops_after_the_machine_disturbed_the_timing"][stop].as_u64(),
             )
         };
-        assert_eq!(outcome(false, disturbed, "ForceRate"), (0, Some(1)));
-        assert_eq!(outcome(false, disturbed, "request Stop"), (0, Some(1)));
+        assert_eq!(outcome(false, disturbed, "force_rate"), (0, Some(1)));
+        assert_eq!(outcome(false, disturbed, "request stop"), (0, Some(1)));
         assert_eq!(
-            outcome(false, LoadEvidence::default(), "StaleSensor"),
+            outcome(false, LoadEvidence::default(), "stale_sensor"),
             (1, None)
         );
-        assert_eq!(outcome(true, disturbed, "ForceRate"), (1, None));
+        assert_eq!(outcome(true, disturbed, "force_rate"), (1, None));
     }
 }

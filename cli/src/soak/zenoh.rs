@@ -278,7 +278,7 @@ fn stop_of(event: &EventMessage) -> Option<String> {
             .violation
             .as_ref()
             .map_or_else(|| reason.name.clone(), |v| v.limit_name.clone()),
-        (None, other) => format!("{other:?}"),
+        (None, other) => wire_name(other),
     })
 }
 
@@ -287,6 +287,16 @@ fn event_time(event: &EventMessage) -> f64 {
         KernelEvent::Transition { time, .. }
         | KernelEvent::Refused { time, .. }
         | KernelEvent::LiftEnded { time, .. } => time.unwrap_or(f64::NAN),
+    }
+}
+
+/// How the wire spells `value` (its serde name, or its tag for a tagged
+/// enum), never its Rust `Debug`.
+fn wire_name(value: &impl serde::Serialize) -> String {
+    match serde_json::to_value(value) {
+        Ok(serde_json::Value::String(name)) => name,
+        Ok(object) => object["cause"].as_str().unwrap_or("?").to_string(),
+        Err(_) => "?".into(),
     }
 }
 
@@ -416,7 +426,7 @@ fn session(
     let mut stop_times = Vec::new();
     for event in &received.events {
         if let Some(name) = stop_of(event) {
-            let from = event_from(event).map_or("?".into(), |s| format!("{s:?}"));
+            let from = event_from(event).map_or("?".into(), |s| wire_name(&s));
             stop_times.push(format!("{name} at {:.3} s in {from}", event_time(event)));
             *stops.entry(name).or_default() += 1;
         }
@@ -443,7 +453,7 @@ fn session(
 impl Session {
     fn json(&self) -> Value {
         json!({
-            "format": format!("{:?}", self.format),
+            "format": wire_name(&self.format),
             "estop_at_s": self.estop_at,
             "completed_script": self.completed,
             "commands": self.counts.commands,
