@@ -630,8 +630,29 @@ mod tests {
     /// `Debug` shape.
     #[test]
     fn display_text_names_values_and_units() {
-        extern crate std;
-        use std::string::ToString;
+        use core::fmt::Write;
+        // The display text in a fixed buffer (the kernel has no allocator).
+        struct Text(heapless::String<160>);
+        impl PartialEq<&str> for Text {
+            fn eq(&self, other: &&str) -> bool {
+                self.0.as_str() == *other
+            }
+        }
+        impl core::fmt::Debug for Text {
+            fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
+                f.write_str(&self.0)
+            }
+        }
+        trait Written {
+            fn to_string(&self) -> Text;
+        }
+        impl<T: Display> Written for T {
+            fn to_string(&self) -> Text {
+                let mut text = heapless::String::new();
+                let _ = write!(text, "{self}");
+                Text(text)
+            }
+        }
         let stop = StopReason::Monitor(Violation {
             limit: Limit::ForceMagnitude,
             value: 45.07774,
