@@ -24,15 +24,7 @@ fn reader() -> Option<PathBuf> {
         env!("CARGO_MANIFEST_DIR"),
         "/../tests/python/.venv/bin/python"
     ));
-    if python.exists() {
-        return Some(python);
-    }
-    assert!(
-        std::env::var_os("CI").is_none(),
-        "CI must have the Python mcap reader: run tests/python/setup.sh"
-    );
-    eprintln!("skipped the Python mcap reader check: run tests/python/setup.sh");
-    None
+    common::tool_ready(&python, "tests/python/setup.sh").then_some(python)
 }
 
 #[test]

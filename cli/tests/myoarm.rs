@@ -14,15 +14,7 @@ fn plant_ready() -> bool {
         env!("CARGO_MANIFEST_DIR"),
         "/../plants/myoarm/.venv/bin/python"
     );
-    if Path::new(python).exists() {
-        return true;
-    }
-    assert!(
-        std::env::var_os("CI").is_none(),
-        "CI must have the MyoArm plant's environment: run plants/myoarm/setup.sh"
-    );
-    eprintln!("skipped: the MyoArm plant's environment is not set up (plants/myoarm/setup.sh)");
-    false
+    common::tool_ready(Path::new(python), "plants/myoarm/setup.sh")
 }
 
 /// One session on the 50th-percentile subject: the plant speaks the

@@ -141,6 +141,33 @@ fn a_toy_plant_session_runs_over_tcp() {
     assert!(plant.wait().unwrap().success());
 }
 
+/// `limb run --json` on the toy plant with `toy_options` (and `extra`
+/// options), which must end as a robot failure with `code` at `line`:
+/// exit 1, one JSON object, not completed. Returns the output and the
+/// report.
+fn faulty_run(toy_options: &str, extra: &[&str], code: &str, line: u64) -> (Output, Value) {
+    let command = format!("{} {toy_options}", toy());
+    let mut args = vec![
+        "run",
+        "--plant-cmd",
+        &command,
+        "--plant-timeout",
+        "1",
+        "--json",
+    ];
+    args.extend(extra);
+    let out = limb(&args);
+    assert_eq!(out.status.code(), Some(1), "{toy_options}");
+    let report: Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    assert_eq!(report["completed"], false, "{toy_options}");
+    assert_eq!(
+        report["robot_error"]["code"], code,
+        "{toy_options}: {report}"
+    );
+    assert_eq!(report["robot_error"]["line"], line, "{toy_options}");
+    (out, report)
+}
+
 /// REQ-ADP-004: each way a plant can break the protocol at its 200th frame (line 201)
 /// ends the session as a robot failure with its named error: exit 1, one
 /// JSON object with `completed: false`, one line on stderr naming the
@@ -161,22 +188,12 @@ fn a_misbehaving_plant_ends_the_session_with_a_named_error() {
     ];
     for (fault, code) in cases {
         let log = temp(&format!("fault-{fault}.csv"));
-        let command = format!("{} --fault {fault} --at 200", toy());
-        let out = limb(&[
-            "run",
-            "--plant-cmd",
-            &command,
-            "--plant-timeout",
-            "1",
-            "--json",
-            "--log",
-            log.to_str().unwrap(),
-        ]);
-        assert_eq!(out.status.code(), Some(1), "{fault}");
-        let report: Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
-        assert_eq!(report["completed"], false, "{fault}");
-        assert_eq!(report["robot_error"]["code"], code, "{fault}: {report}");
-        assert_eq!(report["robot_error"]["line"], 201, "{fault}");
+        let (out, report) = faulty_run(
+            &format!("--fault {fault} --at 200"),
+            &["--log", log.to_str().unwrap()],
+            code,
+            201,
+        );
         assert_eq!(report["final_state"], "SafeStop", "{fault}");
         let stderr = String::from_utf8_lossy(&out.stderr);
         let ours: Vec<&str> = stderr.lines().filter(|l| l.starts_with("limb:")).collect();
@@ -197,20 +214,7 @@ fn a_bad_handshake_is_refused() {
         ("dt", "handshake_refused"),
         ("handshake_silent", "timeout"),
     ] {
-        let command = format!("{} --fault {fault}", toy());
-        let out = limb(&[
-            "run",
-            "--plant-cmd",
-            &command,
-            "--plant-timeout",
-            "1",
-            "--json",
-        ]);
-        assert_eq!(out.status.code(), Some(1), "{fault}");
-        let report: Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
-        assert_eq!(report["completed"], false);
-        assert_eq!(report["robot_error"]["code"], code, "{fault}: {report}");
-        assert_eq!(report["robot_error"]["line"], 1, "{fault}");
+        faulty_run(&format!("--fault {fault}"), &[], code, 1);
     }
 }
 

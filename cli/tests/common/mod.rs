@@ -69,3 +69,20 @@ pub fn assert_no_debug_shape(what: &str, text: &str) {
         panic!("{what} prints a Rust Debug shape: …{found}…");
     }
 }
+
+/// True when `path` (a tool a test needs, set up by `setup`) exists; in CI
+/// (`CI` set) a missing tool fails the test, elsewhere the test says it
+/// skipped.
+#[allow(dead_code)]
+pub fn tool_ready(path: &std::path::Path, setup: &str) -> bool {
+    if path.exists() {
+        return true;
+    }
+    assert!(
+        std::env::var_os("CI").is_none(),
+        "CI must have {}: run {setup}",
+        path.display()
+    );
+    eprintln!("skipped: {} is missing (run {setup})", path.display());
+    false
+}
