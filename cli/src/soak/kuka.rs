@@ -98,7 +98,7 @@ const CASES: [Case; 13] = [
     case(
         FaultKind::ClockBack(5),
         1000,
-        Expect::Stop("SensorTimeReversed"),
+        Expect::Stop("sensor_time_reversed"),
     ),
     case(FaultKind::ClockStall, 1000, STALE),
     case(FaultKind::ClockRepeat, 1000, STALE),
