@@ -256,7 +256,8 @@ impl PlantSession {
 
 /// Runs one session of a kernel configured by `config` on the plant at
 /// `endpoint` (each wait for a line bounded by `timeout`), writing the
-/// session log at `log_path` when given.
+/// session log at `log_path` when given, with an emergency stop at session
+/// time `stop_at` [s] when given.
 ///
 /// # Errors
 /// [`CliError::BadInput`] for an unusable configuration or log path. A
@@ -266,8 +267,9 @@ pub fn plant_session(
     config: KernelConfig,
     timeout: Duration,
     log_path: Option<&std::path::Path>,
+    stop_at: Option<f64>,
 ) -> Result<PlantSession, CliError> {
-    let plan = SessionPlan::default();
+    let plan = crate::stop_at::plan(SessionPlan::default(), stop_at);
     let mut kernel = Box::new(
         Kernel::new(config)
             .map_err(|e| CliError::BadInput(format!("kernel configuration: {e}")))?,
@@ -277,7 +279,7 @@ pub fn plant_session(
         Ok(robot) => robot,
         Err(error) => {
             LogFile::finish(log, log_path)?;
-            let (report, _) = session(&mut kernel, &mut Idle, &plan, None, |_| {
+            let (report, _) = session(&mut kernel, &mut Idle, &plan, None, None, |_| {
                 TruthReport::default()
             });
             return Ok(PlantSession {
@@ -287,7 +289,7 @@ pub fn plant_session(
             });
         }
     };
-    let (mut report, last_now) = session(&mut kernel, &mut robot, &plan, log.as_mut(), truth_of);
+    let (mut report, last_now) = session(&mut kernel, &mut robot, &plan, log.as_mut(), stop_at, truth_of);
     if robot.failure().is_some() {
         // The robot failed: the kernel stops (its trace says so).
         let _ = kernel.request(Request::Stop, last_now);
@@ -352,7 +354,7 @@ impl limb_session::log::Logged for Idle {}
 /// configuration or log path.
 pub fn run(args: &RunArgs, endpoint: &Endpoint, config: KernelConfig) -> Result<(), CliError> {
     let timeout = Duration::from_secs_f64(args.plant.plant_timeout);
-    let outcome = plant_session(endpoint, config, timeout, args.log.as_deref())?;
+    let outcome = plant_session(endpoint, config, timeout, args.log.as_deref(), args.stop_at)?;
     if args.json {
         print_json(&outcome.json())?;
     } else if args.digest {

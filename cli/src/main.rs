@@ -16,6 +16,7 @@ mod run;
 mod session_log;
 mod simulate;
 mod soak;
+mod stop_at;
 mod zenoh;
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};

@@ -288,6 +288,7 @@ pub fn population(
                     KernelConfig::default(),
                     timeout,
                     log.as_deref(),
+                    None,
                 )
                 .map(|s| {
                     SubjectOutcome::of(

@@ -206,6 +206,9 @@ pub struct SessionReport {
     /// The session in the canonical text of `--digest`.
     #[serde(skip)]
     pub digest: String,
+    /// `--stop-at`: the emergency stop and what it did to the arm.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stop: Option<crate::stop_at::StopReport>,
 }
 
 /// What `limb run` records of the session as it runs.
@@ -273,9 +276,21 @@ pub fn run_session(
     plan: &SessionPlan,
     log: Option<&mut Log>,
 ) -> SessionReport {
+    run_session_stopping(kernel, plant, plan, log, None)
+}
+
+/// [`run_session`] with an emergency stop at session time `stop_at` [s]
+/// when given (`--stop-at`, [`crate::stop_at`]).
+pub fn run_session_stopping(
+    kernel: &mut Kernel,
+    plant: &mut dyn ClosedLoopPlant,
+    plan: &SessionPlan,
+    log: Option<&mut Log>,
+    stop_at: Option<f64>,
+) -> SessionReport {
     let truth = TruthReport::from(plant.arm_truth());
     let mut robot = ReferenceRobot::new(plant, plan.rate, plan.timeout);
-    let (report, _) = session(kernel, &mut robot, plan, log, |_| truth);
+    let (report, _) = session(kernel, &mut robot, plan, log, stop_at, |_| truth);
     report
 }
 
@@ -288,6 +303,7 @@ pub fn session<R>(
     robot: &mut R,
     plan: &SessionPlan,
     log: Option<&mut Log>,
+    stop_at: Option<f64>,
     truth: impl FnOnce(&R) -> TruthReport,
 ) -> (SessionReport, f64)
 where
@@ -300,7 +316,8 @@ where
         log.record("/limb/config", "limb.KernelConfig", 0.0, kernel.config());
     }
     let mut observers = (Recorder::default(), log);
-    let Ok(outcome) = limb_session::run(kernel, robot, &mut Operator::new(*plan), &mut observers);
+    let mut supervisor = crate::stop_at::StopAt::new(Operator::new(*plan), stop_at);
+    let Ok(outcome) = limb_session::run(kernel, robot, &mut supervisor, &mut observers);
     let (mut recorder, mut log) = observers;
     let truth = truth(robot);
     let mut digest = recorder.digest;
@@ -319,6 +336,7 @@ where
         max_force_n: recorder.max_force,
         command_hash: format!("{:016x}", outcome.command_hash),
         digest,
+        stop: supervisor.report(),
     };
     if let (Some(log), Some(model)) = (log.as_mut(), &report.model) {
         log.record("/limb/model", "limb.Model", recorder.last_now, model);
@@ -496,9 +514,9 @@ pub fn run(args: &RunArgs, matches: &clap::ArgMatches) -> Result<(), CliError> {
         Kernel::new(config)
             .map_err(|e| CliError::BadInput(format!("kernel configuration: {e}")))?,
     );
-    let plan = SessionPlan::default();
+    let plan = crate::stop_at::plan(SessionPlan::default(), args.stop_at);
     let mut log = LogFile::create(args.log.as_deref())?;
-    let report = run_session(&mut kernel, &mut plant, &plan, log.as_mut());
+    let report = run_session_stopping(&mut kernel, &mut plant, &plan, log.as_mut(), args.stop_at);
     LogFile::finish(log, args.log.as_deref())?;
     let header = format!(
         "limb run: reference plant, arm l1 = {:.3} m, l2 = {:.3} m, noise seed {}, kernel at {:.0} Hz, \
@@ -545,6 +563,10 @@ pub struct RunArgs {
     /// command hash): the text the firmware prints on the target.
     #[arg(long, conflicts_with = "json")]
     pub digest: bool,
+    /// Emergency stop at T seconds of session time, whatever the state;
+    /// the session runs on 2 s to measure it (`stop` in the JSON).
+    #[arg(long, value_name = "T", value_parser = crate::stop_at::parse_time)]
+    pub stop_at: Option<f64>,
 }
 
 /// The kernel configuration for `args`, checked.

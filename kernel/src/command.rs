@@ -5,6 +5,7 @@ use crate::geometry::Wrench;
 use crate::impedance::Saturation;
 use crate::motion::SetPoint;
 use crate::state::StateKind;
+use crate::stop::StopCategory;
 
 /// How the robot should treat the command.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -16,17 +17,19 @@ pub enum CommandMode {
     /// acceleration (Grasp, Validated), or there is no set-point and the
     /// robot holds its own current position.
     Hold,
-    /// Latched stop: zero motion and zero wrench until an operator reset.
+    /// Latched stop until an operator reset: the set-point comes to rest
+    /// as the stop's category says ([`Command::stop`], [`crate::stop`]).
     Stop,
 }
 
 /// The command of one step, frame S.
 ///
 /// # Invariants
-/// Every number is finite. In [`CommandMode::Hold`] and
-/// [`CommandMode::Stop`] the set-point velocity and acceleration are zero.
-/// `|(fx, fz)|` never exceeds the configured force limit nor `|ty|` the
-/// torque limit.
+/// Every number is finite. In [`CommandMode::Hold`] the set-point
+/// velocity and acceleration are zero. [`CommandMode::Stop`] comes with
+/// its category in `stop` (and only it); a motors-off stop has no
+/// set-point and zero wrench. `|(fx, fz)|` never exceeds the configured
+/// force limit nor `|ty|` the torque limit.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Command {
@@ -41,6 +44,8 @@ pub struct Command {
     pub wrench: Wrench,
     /// Saturations that acted on this command.
     pub saturation: Saturation,
+    /// In SafeStop, what the stop does to the arm; `None` otherwise.
+    pub stop: Option<StopCategory>,
 }
 
 impl Command {
@@ -78,8 +83,9 @@ impl Command {
     /// [`crate::kernel`] prove (the proofs replace `hypot` by a stub, so
     /// the force magnitude is the proptest's to check): every number
     /// finite; each force component and the torque within their limits;
-    /// zero set-point velocity and acceleration unless tracking; the stop
-    /// mode exactly in SafeStop, with zero wrench.
+    /// zero set-point velocity and acceleration when holding; the stop
+    /// mode exactly in SafeStop, exactly with a stop category; a motors-off
+    /// stop with neither set-point nor wrench.
     ///
     /// # Errors
     /// The first invariant that does not hold, in words.
@@ -104,20 +110,24 @@ impl Command {
                 && s.acceleration.z == 0.0
                 && s.acceleration.psi == 0.0
         };
-        if self.mode != CommandMode::Track {
+        if self.mode == CommandMode::Hold {
             ensure(
                 self.set_point.as_ref().is_none_or(still),
-                "a hold or stop command moves the set-point",
+                "a hold command moves the set-point",
             )?;
         }
         ensure(
             (self.mode == CommandMode::Stop) == (self.state == StateKind::SafeStop),
             "stop mode and SafeStop disagree",
         )?;
-        if self.mode == CommandMode::Stop {
+        ensure(
+            (self.mode == CommandMode::Stop) == self.stop.is_some(),
+            "stop mode and stop category disagree",
+        )?;
+        if self.stop == Some(StopCategory::MotorsOff) {
             ensure(
-                w.fx == 0.0 && w.fz == 0.0 && w.ty == 0.0,
-                "a stop command applies a wrench",
+                w.fx == 0.0 && w.fz == 0.0 && w.ty == 0.0 && self.set_point.is_none(),
+                "a motors-off stop commands a set-point or a wrench",
             )?;
         }
         Ok(())
@@ -136,6 +146,7 @@ mod tests {
             set_point: Some(SetPoint::hold(Pose::default())),
             wrench: Wrench::new(1.0, 2.0, 0.5),
             saturation: Saturation::default(),
+            stop: None,
         }
     }
 
@@ -151,8 +162,26 @@ mod tests {
         let stop = Command {
             state: StateKind::SafeStop,
             mode: CommandMode::Stop,
+            stop: Some(StopCategory::MotorsOff),
+            set_point: None,
+            wrench: Wrench::ZERO,
             ..hold()
         };
+        assert_eq!(stop.check(&limits), Ok(()));
+        let held_stop = Command {
+            stop: Some(StopCategory::Hold),
+            ..moving
+        };
+        let held_stop = Command {
+            state: StateKind::SafeStop,
+            mode: CommandMode::Stop,
+            ..held_stop
+        };
+        assert_eq!(
+            held_stop.check(&limits),
+            Ok(()),
+            "a stop's set-point may move"
+        );
         let cases = [
             (
                 Command {
@@ -210,7 +239,7 @@ mod tests {
                 },
                 "commanded torque exceeds the torque limit",
             ),
-            (moving, "a hold or stop command moves the set-point"),
+            (moving, "a hold command moves the set-point"),
             (
                 Command {
                     mode: CommandMode::Stop,
@@ -218,13 +247,30 @@ mod tests {
                 },
                 "stop mode and SafeStop disagree",
             ),
-            (stop, "a stop command applies a wrench"),
+            (
+                Command { stop: None, ..stop },
+                "stop mode and stop category disagree",
+            ),
+            (
+                Command {
+                    stop: Some(StopCategory::Hold),
+                    ..hold()
+                },
+                "stop mode and stop category disagree",
+            ),
             (
                 Command {
                     wrench: Wrench::new(0.0, 0.0, 0.5),
                     ..stop
                 },
-                "a stop command applies a wrench",
+                "a motors-off stop commands a set-point or a wrench",
+            ),
+            (
+                Command {
+                    set_point: Some(SetPoint::hold(Pose::default())),
+                    ..stop
+                },
+                "a motors-off stop commands a set-point or a wrench",
             ),
         ];
         for (command, failure) in cases {

@@ -3,7 +3,9 @@
 //!
 //! # Theory of operation
 //! Each [`Kernel::step`]:
-//! 1. in SafeStop, returns the latched stop command and nothing else;
+//! 1. in SafeStop, returns the stop's command at `now` ([`crate::stop`]:
+//!    the set-point on its way to rest, the wrench of its category) and
+//!    keeps watching the arm for the reset (a reset needs it still);
 //! 2. runs the watchdog on the frame and the clock;
 //! 3. updates the rate window (speed, force rate);
 //! 4. runs the monitors that apply to the state ([`crate::monitor`]);
@@ -33,6 +35,7 @@ use crate::config::{ConfigError, KernelConfig, SafetyLimits};
 use crate::estimation::ArmEstimate;
 use crate::geometry::{Pose, Wrench};
 use crate::impedance::{ImpedanceLaw, Saturation};
+use crate::lift::LiftPhase;
 use crate::monitor::force::ForceMonitor;
 use crate::monitor::joint_limits::JointLimitMonitor;
 use crate::monitor::rates::RateWindow;
@@ -44,8 +47,9 @@ use crate::motion::SetPoint;
 use crate::path::{GraspPath, PathSample};
 use crate::state::{
     EstimateStep, Grasp, LimitUpdateRefusal, Refusal, RefusalReason, Request, State, StateKind,
-    StopReason,
+    StopReason, StopStart,
 };
+use crate::stop::StopCategory;
 use crate::trace::{Cause, Event, Trace, TraceEvent};
 use crate::validate::ValidatedArm;
 
@@ -63,8 +67,22 @@ pub struct Kernel {
     rates: RateWindow,
     last_frame: Option<PathSample>,
     last_now: Option<f64>,
+    /// The set-point and wrench of the last command before any stop.
+    commanded: Option<(SetPoint, Wrench, CommandMode)>,
+    /// The latest finite time a stop has been stepped at (its move and
+    /// ramp never go back with a clock that does) [s].
+    stop_clock: f64,
+    /// Running mean (time constant [`HOLDING_TIME_CONSTANT`]) of the
+    /// holding pose x − f_ext/K of the trusted frames less the set-point
+    /// commanded before each: where a stop's set-point holds the arm,
+    /// without the force noise of one frame (0.5 N / 200 N/m = 2.5 mm).
+    holding_offset: Option<Pose>,
     trace: Trace,
 }
+
+/// Time constant of the holding pose's running mean [s]: 50 ms at 1 kHz
+/// averages 50 frames (2.5 mm of force noise → 0.25 mm).
+pub const HOLDING_TIME_CONSTANT: f64 = 0.05;
 
 impl Kernel {
     /// A kernel in Grasp with configuration `config`.
@@ -105,6 +123,9 @@ impl Kernel {
             path: GraspPath::new(),
             last_frame: None,
             last_now: None,
+            commanded: None,
+            stop_clock: f64::NAN,
+            holding_offset: None,
             trace: Trace::default(),
         }
     }
@@ -137,8 +158,8 @@ impl Kernel {
     /// One control step: sensor `frame` (frame S) at kernel time `now` [s].
     /// Never panics; any fault becomes a safe stop in this same step.
     pub fn step(&mut self, frame: &PathSample, now: f64) -> Command {
-        if let State::SafeStop(stop) = &self.state {
-            return stop_command(stop.hold());
+        if let State::SafeStop(stop) = self.state {
+            return self.stopped_step(&stop, frame, now);
         }
         let watchdog = Watchdog::new(self.config.limits.max_sensor_age);
         let previous = self.last_frame.map(|f| f.time);
@@ -149,6 +170,7 @@ impl Kernel {
         if previous.is_none_or(|t| frame.time > t) {
             self.rates.push(*frame);
             self.last_frame = Some(*frame);
+            self.update_holding_offset(frame, previous);
         }
         let rates = self.rates.rates();
         if let Err(violation) = self.check_monitors(frame, rates.speed(), rates.force_rate) {
@@ -172,11 +194,164 @@ impl Kernel {
             set_point: Some(out.set_point),
             wrench: out.wrench,
             saturation: out.saturation,
+            stop: None,
         };
         if !command.is_finite() || out.saturation.non_finite {
             return self.stop(StopReason::NonFiniteCommand, now, Some(frame.pose));
         }
+        self.commanded = Some((out.set_point, out.wrench, mode));
         command
+    }
+
+    /// The stop that holds the kernel, while it holds it.
+    pub fn stopped(&self) -> Option<&crate::state::SafeStop> {
+        match &self.state {
+            State::SafeStop(stop) => Some(stop),
+            _ => None,
+        }
+    }
+
+    /// A step in SafeStop: the stop's set-point at `now`, its category's
+    /// wrench (a hold: the impedance law about the set-point on a finite
+    /// frame, else the wrench of the stop), and the frame, when finite and
+    /// newer, into the rate window that judges the reset.
+    fn stopped_step(
+        &mut self,
+        stop: &crate::state::SafeStop,
+        frame: &PathSample,
+        now: f64,
+    ) -> Command {
+        let finite = frame.time.is_finite() && frame.pose.is_finite() && frame.wrench.is_finite();
+        let newer = self.last_frame.is_none_or(|f| frame.time > f.time);
+        if finite && newer && now.is_finite() && frame.time <= now {
+            self.rates.push(*frame);
+            self.last_frame = Some(*frame);
+        }
+        if now.is_finite() && !(now <= self.stop_clock) {
+            self.stop_clock = now;
+        }
+        let now = self.stop_clock;
+        let set_point = stop.set_point(now);
+        let mut saturation = Saturation::default();
+        let wrench = match (stop.category(), set_point) {
+            (StopCategory::Hold, Some(set_point)) if finite => {
+                let out = self
+                    .law
+                    .command(frame.pose, self.rates.rates().velocity, set_point);
+                if out.saturation.non_finite {
+                    stop.ramped_wrench(now)
+                } else {
+                    saturation = out.saturation;
+                    out.wrench
+                }
+            }
+            _ => stop.ramped_wrench(now),
+        };
+        Command {
+            state: StateKind::SafeStop,
+            mode: CommandMode::Stop,
+            set_point,
+            wrench,
+            saturation,
+            stop: Some(stop.category()),
+        }
+    }
+
+    /// Updates the running mean of the holding pose's offset from the
+    /// set-point commanded before `frame` (trusted: the watchdog passed
+    /// it), weighted by the frame's interval since `previous`.
+    fn update_holding_offset(&mut self, frame: &PathSample, previous: Option<f64>) {
+        let Some((set_point, _, _)) = self.commanded else {
+            return;
+        };
+        let holding = holding_pose(frame, &self.config.impedance.stiffness);
+        let sample = Pose::new(
+            holding.x - set_point.pose.x,
+            holding.z - set_point.pose.z,
+            holding.psi - set_point.pose.psi,
+        );
+        if !sample.is_finite() {
+            return;
+        }
+        let weight = previous.map_or(1.0, |t| {
+            ((frame.time - t) / HOLDING_TIME_CONSTANT).clamp(0.0, 1.0)
+        });
+        let mean = self.holding_offset.unwrap_or(sample);
+        self.holding_offset = Some(Pose::new(
+            mean.x + (sample.x - mean.x) * weight,
+            mean.z + (sample.z - mean.z) * weight,
+            mean.psi + (sample.psi - mean.psi) * weight,
+        ));
+    }
+
+    /// What the kernel knows when it stops at `now`, `at` the pose of a
+    /// frame the monitors judged (the frame that tripped, when it was
+    /// finite): the set-point and wrench commanded last, where the arm is
+    /// held (that set-point moved by the running mean of the holding
+    /// pose's offset from it, or the last frame's holding pose), the last
+    /// trusted measured pose, and how a hold moves from the state it
+    /// leaves:
+    /// * the lift (its set-point leads the arm by up to 0.15 m and carries
+    ///   it): the set-point slows down along its line (coasting), in at
+    ///   least [`crate::stop::LIFT_HOLD_MIN_TIME`], at the lift's settling
+    ///   speeds;
+    /// * the lift's settling move: on to the lift's own holding pose;
+    /// * elsewhere (the manipulation tracks its set-point closely, and may
+    ///   be lowering the arm): straight to the holding pose, in at least
+    ///   [`crate::stop::HOLD_MIN_TIME`] at up to the speed limit.
+    fn stop_start(&self, now: f64, at: Option<Pose>) -> StopStart {
+        let trusted = self
+            .last_frame
+            .filter(|f| f.pose.is_finite() && f.wrench.is_finite());
+        let stiffness = &self.config.impedance.stiffness;
+        let mut holding = match (self.commanded, self.holding_offset) {
+            (Some((s, _, _)), Some(offset)) => Some(Pose::new(
+                s.pose.x + offset.x,
+                s.pose.z + offset.z,
+                s.pose.psi + offset.psi,
+            )),
+            _ => trusted.map(|f| holding_pose(&f, stiffness)),
+        };
+        let shaping = &self.config.lift_shaping;
+        let (mut peak_speed, mut min_time, mut coast) = (
+            self.config.limits.max_speed,
+            crate::stop::HOLD_MIN_TIME,
+            false,
+        );
+        if let State::Estimate(estimate) = &self.state {
+            match estimate.lift().phase() {
+                LiftPhase::Lifting | LiftPhase::AwaitingForearm { .. } => {
+                    (peak_speed, min_time, coast) =
+                        (shaping.hold_speed, crate::stop::LIFT_HOLD_MIN_TIME, true);
+                }
+                LiftPhase::Settling { hold, .. } => {
+                    holding = Some(*hold);
+                    peak_speed = shaping.hold_speed;
+                }
+                LiftPhase::Concluding { .. } => {}
+            }
+        }
+        StopStart {
+            now: if now.is_finite() { now } else { f64::NAN },
+            set_point: self.commanded.map(|(s, _, _)| s),
+            wrench: self.commanded.map_or(Wrench::ZERO, |(_, w, _)| w),
+            holding,
+            measured: trusted.map(|f| f.pose).or(at),
+            peak_speed,
+            peak_rate: shaping.hold_rate,
+            min_time,
+            coast,
+        }
+    }
+
+    /// True when a reset at `now` finds the stop's set-point at rest and
+    /// the arm still: a fresh, finite frame, the rate window spanned and
+    /// the grasp slower than [`crate::stop::RESET_MAX_SPEED`].
+    fn still_for_reset(&self, stop: &crate::state::SafeStop, now: f64) -> bool {
+        stop.is_settled(now)
+            && self.fresh_pose(now).is_some()
+            && self.rates.spans()
+            && self.rates.rates().speed() <= crate::stop::RESET_MAX_SPEED
     }
 
     /// Handles an operator or supervisor request at kernel time `now` [s].
@@ -192,16 +367,24 @@ impl Kernel {
             reason,
         };
         let time_ok = now.is_finite() && self.last_now.is_none_or(|t| now >= t);
+        // Taken before the state is moved out: how a stop moves depends on it.
+        let start = self.stop_start(now, self.last_frame.map(|f| f.pose));
         let state = core::mem::replace(&mut self.state, State::Grasp(Grasp::new()));
         let result = match (request, state) {
             (Request::Stop, State::SafeStop(stop)) => Ok(State::SafeStop(stop)),
-            (Request::Stop, other) => {
-                let at = self.last_frame.map(|f| f.pose);
-                Ok(State::SafeStop(stop_state(other, StopReason::Operator, at)))
+            (Request::Stop, other) => Ok(State::SafeStop(stop_state(
+                other,
+                StopReason::Operator,
+                start,
+            ))),
+            (Request::Reset, State::SafeStop(stop)) if !self.still_for_reset(&stop, now) => {
+                Err((State::SafeStop(stop), refuse(RefusalReason::ArmNotStill)))
             }
             (Request::Reset, State::SafeStop(stop)) => {
                 self.rates.clear();
                 self.last_frame = None;
+                self.commanded = None;
+                self.holding_offset = None;
                 Ok(State::Grasp(stop.reset()))
             }
             (_, other) if !time_ok => Err((other, refuse(RefusalReason::InvalidTime))),
@@ -416,20 +599,31 @@ impl Kernel {
         Ok(hold)
     }
 
-    /// Enters SafeStop for `reason` and returns the stop command.
+    /// Enters SafeStop for `reason` and returns the stop's first command
+    /// (`frame`, the frame of this step, gives a hold its wrench).
     fn stop(&mut self, reason: StopReason, now: f64, at: Option<Pose>) -> Command {
         let from = self.state.kind();
+        let start = self.stop_start(now, at);
         let state = core::mem::replace(&mut self.state, State::Grasp(Grasp::new()));
-        let stop = stop_state(state, reason, at);
-        let hold = stop.hold();
+        let stop = stop_state(state, reason, start);
         self.state = State::SafeStop(stop);
+        self.stop_clock = start.now;
         self.record(
             if now.is_finite() { now } else { f64::NAN },
             from,
             StateKind::SafeStop,
             Cause::Stop(reason),
         );
-        stop_command(hold)
+        // The stopping step's own wrench: the stop's (the frame that
+        // tripped is not used to command).
+        Command {
+            state: StateKind::SafeStop,
+            mode: CommandMode::Stop,
+            set_point: stop.set_point(now),
+            wrench: stop.ramped_wrench(now),
+            saturation: Saturation::default(),
+            stop: Some(stop.category()),
+        }
     }
 
     fn record(&mut self, time: f64, from: StateKind, to: StateKind, cause: Cause) {
@@ -449,25 +643,25 @@ enum Plan {
 }
 
 /// Moves any state into SafeStop.
-fn stop_state(state: State, reason: StopReason, at: Option<Pose>) -> crate::state::SafeStop {
+fn stop_state(state: State, reason: StopReason, start: StopStart) -> crate::state::SafeStop {
     match state {
-        State::Grasp(s) => s.stop(reason, at),
-        State::Estimate(s) => s.stop(reason, at),
-        State::Validated(s) => s.stop(reason, at),
-        State::Manipulate(s) => s.stop(reason, at),
+        State::Grasp(s) => s.stop(reason, start),
+        State::Estimate(s) => s.stop(reason, start),
+        State::Validated(s) => s.stop(reason, start),
+        State::Manipulate(s) => s.stop(reason, start),
         State::SafeStop(s) => s,
     }
 }
 
-/// The latched stop command: zero motion, zero wrench.
-fn stop_command(hold: Option<SetPoint>) -> Command {
-    Command {
-        state: StateKind::SafeStop,
-        mode: CommandMode::Stop,
-        set_point: hold,
-        wrench: Wrench::ZERO,
-        saturation: Saturation::default(),
-    }
+/// The set-point that holds the arm where `frame` measured it with the
+/// wrench it measured: x − f_ext/K (as the lift's hold, [`crate::lift`]).
+fn holding_pose(frame: &PathSample, stiffness: &[f64; 3]) -> Pose {
+    let w = frame.wrench;
+    Pose::new(
+        frame.pose.x - w.fx / stiffness[0],
+        frame.pose.z - w.fz / stiffness[1],
+        frame.pose.psi - w.ty / stiffness[2],
+    )
 }
 
 #[cfg(any(test, kani))]
@@ -685,9 +879,11 @@ mod verification {
         );
     }
 
-    /// REQ-SM-006, REQ-CMD-003: once stopped, steps with any frames and
-    /// clocks and any requests but Reset give the same zero-wrench,
-    /// zero-motion stop command.
+    /// REQ-SM-006, REQ-CMD-003, REQ-STOP-001: once stopped (a stop
+    /// request in Validated: a hold), steps with any frames and clocks and
+    /// any requests but Reset stay in SafeStop with the same reason and
+    /// category and command the same set-point at rest, the held pose (the
+    /// wrench is the impedance law's about it, within the limits).
     #[cfg_attr(kani, kani::proof)]
     #[cfg_attr(kani, kani::unwind(17))]
     #[cfg_attr(kani, kani::stub(libm::sqrt, crate::kani_stubs::stub::sqrt))]
@@ -695,23 +891,31 @@ mod verification {
     pub fn verify_req_sm_006_safe_stop_is_latched() {
         let (mut kernel, _) = kernel_in(StateKind::SafeStop);
         let limits = kernel.config().limits;
-        let first = kernel.step(&any_frame(), kani::any());
-        assert_eq!(first.check_components(&limits), Ok(()));
-        assert_eq!(first.mode, CommandMode::Stop);
+        let reason = kernel.stopped().map(|s| s.reason());
+        let check = |kernel: &mut Kernel| {
+            let command = kernel.step(&any_frame(), kani::any());
+            assert_eq!(command.check_components(&limits), Ok(()));
+            assert_eq!(command.mode, CommandMode::Stop);
+            assert_eq!(command.stop, Some(StopCategory::Hold));
+            assert_eq!(command.set_point, Some(SetPoint::hold(HOLD)));
+            assert_eq!(kernel.state().kind(), StateKind::SafeStop);
+            assert_eq!(kernel.stopped().map(|s| s.reason()), reason);
+            command
+        };
+        let first = check(&mut kernel);
         // Two rounds: a request, then a step (no loop: nothing to unwind).
         let request = any_request();
         kani::assume(request != Request::Reset);
         let _ = kernel.request(request, kani::any());
-        assert_eq!(kernel.step(&any_frame(), kani::any()), first);
+        check(&mut kernel);
         let request = any_request();
         kani::assume(request != Request::Reset);
         let answer = kernel.request(request, kani::any());
-        assert_eq!(kernel.step(&any_frame(), kani::any()), first);
-        assert_eq!(kernel.state().kind(), StateKind::SafeStop);
+        let last = check(&mut kernel);
         kani::cover!(answer.is_err(), "latch: a request refused");
         kani::cover!(
-            first.set_point == Some(SetPoint::hold(HOLD)),
-            "latch: holds the pose"
+            first.wrench != last.wrench,
+            "latch: the hold's wrench follows the arm"
         );
     }
 

@@ -27,6 +27,7 @@
 //! online estimator and its bounded refinement),
 //! [`validate`] (the only maker of [`validate::ValidatedArm`]), [`state`]
 //! (typed states and transitions), [`monitor`], [`impedance`], [`command`],
+//! [`stop`] (stop categories and the set-point's move at a stop),
 //! [`trace`], [`config`], [`linear`] (small linear systems, no panic
 //! path), and [`kernel`] (the runtime wrapper).
 //!
@@ -76,6 +77,7 @@ pub mod monitor;
 pub mod motion;
 pub mod path;
 pub mod state;
+pub mod stop;
 pub mod trace;
 pub mod validate;
 pub mod vocabulary;
@@ -87,3 +89,4 @@ pub use path::PathSample;
 pub use state::{
     LimitUpdateRefusal, Refusal, RefusalReason, Request, State, StateKind, StopReason,
 };
+pub use stop::StopCategory;

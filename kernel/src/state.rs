@@ -32,7 +32,7 @@ use crate::config::{ConfigError, KernelConfig};
 use crate::estimation::online::{JointEnvelope, OnlineEstimator};
 use crate::estimation::refine::{Progress, SAMPLES_PER_STEP};
 use crate::estimation::{ArmEstimate, EstimateError};
-use crate::geometry::{Point, Pose};
+use crate::geometry::{Point, Pose, Wrench};
 use crate::lift::{LiftCommand, LiftPhase, ShapedLift};
 use crate::monitor::joint_limits::JointLimitMonitor;
 use crate::monitor::workspace::WorkspaceMonitor;
@@ -41,6 +41,7 @@ use crate::motion::{
     EstimationMotion, EstimationMotionParameters, MinimumJerkMove, PlanError, SetPoint,
 };
 use crate::path::{is_due, GraspPath, PathSample};
+use crate::stop::{StopCategory, StopMotion, HOLD_MIN_TIME, RAMP_DOWN_TIME};
 use crate::validate::{validate, Rejection, ValidatedArm, ValidationLimits};
 
 /// Names of the states, for events and reports.
@@ -150,11 +151,72 @@ pub struct Manipulate {
     started_at: f64,
 }
 
-/// SafeStop: latched; holds the pose where it stopped.
+/// SafeStop: latched; its category ([`StopReason::category`]) decides
+/// what the robot does with the arm ([`crate::stop`]).
+///
+/// # Invariants
+/// `hold`, the pose the set-point comes to rest at, is finite when present;
+/// `motion`, when present, ends at `hold`; a motors-off stop has neither;
+/// `wrench` is finite.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SafeStop {
     hold: Option<Pose>,
     reason: StopReason,
+    category: StopCategory,
+    at: f64,
+    motion: Option<StopMotion>,
+    wrench: Wrench,
+}
+
+/// What the kernel knows at the instant it stops: where the set-point was,
+/// what it commanded and where the arm is, each only when trusted.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StopStart {
+    /// Kernel time of the stop [s] (NaN when the clock was not usable).
+    pub now: f64,
+    /// The set-point commanded last (pose, velocity, acceleration).
+    pub set_point: Option<SetPoint>,
+    /// The wrench commanded last.
+    pub wrench: Wrench,
+    /// The set-point that holds the arm where it is, x − f_ext/K (frame S),
+    /// from trusted measurements.
+    pub holding: Option<Pose>,
+    /// The last trusted measured pose.
+    pub measured: Option<Pose>,
+    /// Peak grasp-point speed of the stop's move [m/s].
+    pub peak_speed: f64,
+    /// Peak forearm rate of the stop's move [rad/s].
+    pub peak_rate: f64,
+    /// Shortest move of a hold, per axis [s].
+    pub min_time: f64,
+    /// A hold's set-point coasts on by its velocity at the stop over half
+    /// the move (it slows down along its path rather than turning back);
+    /// not when the set-point was already heading for a holding pose.
+    pub coast: bool,
+}
+
+impl StopStart {
+    /// A stop at `now` that knows only the pose `at` (held still).
+    pub fn at_pose(now: f64, at: Option<Pose>) -> Self {
+        Self {
+            now,
+            set_point: at.map(SetPoint::hold),
+            wrench: Wrench::ZERO,
+            holding: at,
+            measured: at,
+            peak_speed: 0.1,
+            peak_rate: 0.5,
+            min_time: HOLD_MIN_TIME,
+            coast: false,
+        }
+    }
+
+    fn or_holding(self, hold: Option<Pose>) -> Self {
+        Self {
+            set_point: self.set_point.or(hold.map(SetPoint::hold)),
+            ..self
+        }
+    }
 }
 
 /// A manipulation move that passed the target checks; only
@@ -264,9 +326,9 @@ impl Grasp {
         }
     }
 
-    /// Stops.
-    pub fn stop(self, reason: StopReason, at: Option<Pose>) -> SafeStop {
-        SafeStop::latch(reason, at.or(self.hold))
+    /// Stops (holding the Grasp hold when nothing was commanded yet).
+    pub fn stop(self, reason: StopReason, start: StopStart) -> SafeStop {
+        SafeStop::latch(reason, start.or_holding(self.hold))
     }
 }
 
@@ -372,8 +434,8 @@ impl Estimate {
     }
 
     /// Stops.
-    pub fn stop(self, reason: StopReason, at: Option<Pose>) -> SafeStop {
-        SafeStop::latch(reason, at)
+    pub fn stop(self, reason: StopReason, start: StopStart) -> SafeStop {
+        SafeStop::latch(reason, start)
     }
 }
 
@@ -424,8 +486,8 @@ impl Validated {
     }
 
     /// Stops.
-    pub fn stop(self, reason: StopReason, at: Option<Pose>) -> SafeStop {
-        SafeStop::latch(reason, at.or(Some(self.hold)))
+    pub fn stop(self, reason: StopReason, start: StopStart) -> SafeStop {
+        SafeStop::latch(reason, start.or_holding(Some(self.hold)))
     }
 }
 
@@ -449,16 +511,72 @@ impl Manipulate {
     }
 
     /// Stops.
-    pub fn stop(self, reason: StopReason, at: Option<Pose>) -> SafeStop {
-        SafeStop::latch(reason, at)
+    pub fn stop(self, reason: StopReason, start: StopStart) -> SafeStop {
+        SafeStop::latch(reason, start)
     }
 }
 
 impl SafeStop {
-    fn latch(reason: StopReason, hold: Option<Pose>) -> Self {
+    /// The stop of `reason` from `start`: its category's set-point move and
+    /// wrench ([`crate::stop`]). Total: whatever is not finite is left out
+    /// (no move, no pose, zero wrench).
+    fn latch(reason: StopReason, start: StopStart) -> Self {
+        let category = reason.category();
+        let finite_set_point = start
+            .set_point
+            .filter(|s| s.pose.is_finite() && s.velocity.is_finite() && s.acceleration.is_finite());
+        let holding = start.holding.filter(|p| p.is_finite());
+        let measured = start.measured.filter(|p| p.is_finite());
+        let wrench = if start.wrench.is_finite() {
+            start.wrench
+        } else {
+            Wrench::ZERO
+        };
+        let (target, min_time) = match category {
+            StopCategory::MotorsOff => (None, 0.0),
+            // A still set-point already holds the arm (Grasp, Validated,
+            // the lift's holds): it stays, no move.
+            StopCategory::Hold => match finite_set_point {
+                Some(s) => (holding.or(Some(s.pose)), start.min_time.max(HOLD_MIN_TIME)),
+                None => (holding.or(measured), 0.0),
+            },
+            StopCategory::RampDown => (
+                measured.or(finite_set_point.map(|s| s.pose)),
+                RAMP_DOWN_TIME,
+            ),
+        };
+        let motion = match (finite_set_point, target) {
+            (Some(from), Some(target)) if min_time > 0.0 => StopMotion::new(
+                &from,
+                target,
+                start.now,
+                min_time,
+                start.peak_speed,
+                start.peak_rate,
+                start.coast && category == StopCategory::Hold,
+            ),
+            _ => None,
+        };
+        let hold = match (category, motion) {
+            (StopCategory::MotorsOff, _) => None,
+            (_, Some(motion)) => Some(motion.goal()),
+            // A ramp-down that could not move (no set-point, or a clock
+            // that is not finite) holds where the set-point was, or the
+            // trusted pose.
+            (StopCategory::RampDown, None) => finite_set_point.map(|s| s.pose).or(target),
+            (StopCategory::Hold, None) => target,
+        };
         Self {
-            hold: hold.filter(|p| p.is_finite()),
+            hold,
             reason,
+            category,
+            at: start.now,
+            motion,
+            wrench: if category == StopCategory::MotorsOff {
+                Wrench::ZERO
+            } else {
+                wrench
+            },
         }
     }
 
@@ -467,15 +585,59 @@ impl SafeStop {
         self.reason
     }
 
-    /// The pose held; `None` when no finite pose was ever known (the robot
-    /// then holds its own current position).
+    /// What the stop does to the arm.
+    pub fn category(&self) -> StopCategory {
+        self.category
+    }
+
+    /// Kernel time of the stop [s] (NaN when the clock was not usable).
+    pub fn at(&self) -> f64 {
+        self.at
+    }
+
+    /// The set-point's move to its rest, when it moves.
+    pub fn motion(&self) -> Option<&StopMotion> {
+        self.motion.as_ref()
+    }
+
+    /// The set-point at rest; `None` for a motors-off stop, or when no
+    /// finite pose was ever known (the robot then holds its own current
+    /// position).
     pub fn hold(&self) -> Option<SetPoint> {
         self.hold.map(SetPoint::hold)
     }
 
+    /// The set-point at kernel time `now`: on its move, then at rest.
+    pub fn set_point(&self, now: f64) -> Option<SetPoint> {
+        match self.motion {
+            Some(motion) => Some(motion.at(now)),
+            None => self.hold(),
+        }
+    }
+
+    /// The wrench commanded at the stop, for a ramp-down: ramped to zero
+    /// over the move; zero once it is done, and always for motors off.
+    pub fn ramped_wrench(&self, now: f64) -> Wrench {
+        match (self.category, self.motion) {
+            (StopCategory::RampDown, Some(motion)) => {
+                crate::stop::ramped(self.wrench, motion.ramp(now))
+            }
+            (StopCategory::Hold, _) => self.wrench,
+            _ => Wrench::ZERO,
+        }
+    }
+
+    /// True once the set-point is at rest (at `now`; a NaN time counts as
+    /// at rest).
+    pub fn is_settled(&self, now: f64) -> bool {
+        self.motion.is_none_or(|m| m.is_complete(now))
+    }
+
     /// The operator's reset: back to [`Grasp`], with no model, holding the
-    /// stop's set-point (the robot was holding it: no step, REQ-SM-009),
-    /// or latching anew when the stop had none.
+    /// stop's set-point at rest (the robot was holding it: no step,
+    /// REQ-SM-009), or latching anew when the stop had none (motors off:
+    /// the arm rests where it is measured). The kernel allows it only
+    /// once the set-point is at rest and the arm still (REQ-STOP-003).
     pub fn reset(self) -> Grasp {
         self.hold.map_or(Grasp::new(), Grasp::holding)
     }
@@ -552,6 +714,10 @@ pub enum RefusalReason {
     Target(TargetError),
     /// The estimation motion could not be planned.
     Plan(crate::motion::PlanError),
+    /// A reset before the stop's set-point is at rest and the arm still
+    /// (a fresh, finite measurement over the whole rate window, speed at
+    /// most [`crate::stop::RESET_MAX_SPEED`]; REQ-STOP-003).
+    ArmNotStill,
 }
 
 impl RefusalReason {
@@ -563,6 +729,7 @@ impl RefusalReason {
             RefusalReason::InvalidTime => 3,
             RefusalReason::Target(_) => 4,
             RefusalReason::Plan(_) => 5,
+            RefusalReason::ArmNotStill => 6,
         }
     }
 }
@@ -650,9 +817,10 @@ mod verification {
         );
     }
 
-    /// REQ-SM-006, REQ-SM-009: a stop from any state latches the pose only
-    /// when it is finite, and the only way out, a reset, leads to Grasp
-    /// holding the stop's set-point (none when the stop had none).
+    /// REQ-SM-006, REQ-SM-009, REQ-STOP-001: a stop from any state
+    /// latches the pose only when it is finite, with its cause's category,
+    /// and the only way out, a reset, leads to Grasp holding the stop's
+    /// set-point at rest (none when the stop had none).
     #[cfg_attr(kani, kani::proof)]
     pub fn verify_req_sm_006_stop_holds_only_a_finite_pose() {
         let at = if kani::any() {
@@ -660,20 +828,29 @@ mod verification {
         } else {
             None
         };
-        let stop = Grasp::new().stop(StopReason::Operator, at);
+        let reason = if kani::any() {
+            StopReason::Operator
+        } else {
+            StopReason::NonFiniteCommand
+        };
+        let stop = Grasp::new().stop(reason, StopStart::at_pose(0.0, at));
+        assert_eq!(stop.category(), reason.category());
         match (stop.hold(), at) {
             (Some(hold), Some(pose)) => {
                 assert!(pose.is_finite() && hold == SetPoint::hold(pose));
+                assert!(stop.category().holds());
                 kani::cover!(true, "stop: holds the pose");
             }
             (None, Some(pose)) => {
-                assert!(!pose.is_finite());
-                kani::cover!(true, "stop: a non-finite pose is not held");
+                assert!(!pose.is_finite() || stop.category() == StopCategory::MotorsOff);
+                kani::cover!(!pose.is_finite(), "stop: a non-finite pose is not held");
+                kani::cover!(pose.is_finite(), "stop: motors off holds nothing");
             }
             (Some(_), None) => panic!("a stop without a pose holds one"),
             (None, None) => {}
         }
-        assert_eq!(stop.reason(), StopReason::Operator);
+        assert_eq!(stop.reason(), reason);
+        assert!(stop.ramped_wrench(kani::any()).is_finite());
         let grasp = stop.reset();
         assert_eq!(grasp.held().map(SetPoint::hold), stop.hold());
     }

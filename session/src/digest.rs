@@ -37,7 +37,9 @@ impl CommandHash {
 
     /// Adds `command`: state, mode, whether a set-point is present, the
     /// set-point's pose, velocity and acceleration (x, z, psi), the wrench
-    /// (fx, fz, ty) and the four saturation flags.
+    /// (fx, fz, ty), the four saturation flags and, in SafeStop only, the
+    /// stop category's code (so the hash of a session that never stops is
+    /// the one it had before stop categories).
     pub fn push(&mut self, command: &Command) {
         self.byte(command.state as u8);
         self.byte(command.mode as u8);
@@ -58,6 +60,9 @@ impl CommandHash {
         let s = command.saturation;
         for flag in [s.force, s.torque, s.speed, s.non_finite] {
             self.byte(u8::from(flag));
+        }
+        if let Some(category) = command.stop {
+            self.byte(category.code());
         }
     }
 
@@ -114,7 +119,7 @@ mod tests {
     use limb_kernel::geometry::{Pose, Wrench};
     use limb_kernel::impedance::Saturation;
     use limb_kernel::motion::SetPoint;
-    use limb_kernel::{Command, CommandMode, StateKind};
+    use limb_kernel::{Command, CommandMode, StateKind, StopCategory};
 
     fn command(x: f64) -> Command {
         Command {
@@ -123,6 +128,7 @@ mod tests {
             set_point: Some(SetPoint::hold(Pose::new(x, 0.0, 0.0))),
             wrench: Wrench::ZERO,
             saturation: Saturation::default(),
+            stop: None,
         }
     }
 
@@ -153,6 +159,15 @@ mod tests {
         let mut saturated = a;
         saturated.saturation.speed = true;
         assert_ne!(hash(&[a]), hash(&[saturated]));
+        let stops = StopCategory::ALL.map(|category| {
+            hash(&[Command {
+                state: StateKind::SafeStop,
+                mode: CommandMode::Stop,
+                stop: Some(category),
+                ..a
+            }])
+        });
+        assert!(stops[0] != stops[1] && stops[1] != stops[2] && stops[0] != stops[2]);
         assert_eq!(hash(&[a, b]), hash(&[a, b]));
     }
 }

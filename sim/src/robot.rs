@@ -10,7 +10,8 @@
 use crate::closed_loop::ClosedLoopPlant;
 use crate::plant::Measurement;
 use core::convert::Infallible;
-use limb_kernel::{Command, PathSample};
+use limb_kernel::motion::SetPoint;
+use limb_kernel::{Command, PathSample, StopCategory};
 use limb_session::{Frame, Robot, Sensed};
 
 /// A closed-loop plant driven by the kernel at a fixed rate.
@@ -67,8 +68,18 @@ impl<P: ClosedLoopPlant> Robot for ReferenceRobot<P> {
         }))
     }
 
+    /// Follows the command's set-point (held when it has none). A
+    /// motors-off stop leaves the robot limp: its set-point follows the
+    /// measured pose, so the spring carries nothing and only the damping
+    /// of the drives' short-circuited windings acts (plant.md's robot has
+    /// no brakes).
     fn actuate(&mut self, command: &Command) -> Result<(), Infallible> {
-        self.plant.advance(command.set_point.as_ref(), self.period);
+        if command.stop == Some(StopCategory::MotorsOff) {
+            let limp = self.last.map(|m| SetPoint::hold(m.pose));
+            self.plant.advance(limp.as_ref(), self.period);
+        } else {
+            self.plant.advance(command.set_point.as_ref(), self.period);
+        }
         Ok(())
     }
 }

@@ -4,9 +4,10 @@
 //! the same thing under every engine.
 
 use limb_kernel::arm::ArmGeometry;
-use limb_kernel::geometry::Pose;
+use limb_kernel::geometry::{Pose, PoseRate};
+use limb_kernel::motion::SetPoint;
 use limb_kernel::trace::{Cause, Event};
-use limb_kernel::{Command, Kernel, KernelConfig, PathSample, StateKind};
+use limb_kernel::{Command, Kernel, KernelConfig, PathSample, StateKind, StopCategory};
 
 /// A failed check: which property, in words an auditor can match to `spec/`.
 pub type CheckResult = Result<(), &'static str>;
@@ -83,12 +84,22 @@ pub fn model_violation(p: Pose, config: &KernelConfig, arm: &ArmGeometry) -> boo
 
 /// A model of the session that the kernel's observable behaviour must
 /// follow: Manipulate only after the validator accepted a model since the
-/// last reset, and SafeStop latched with an unchanging stop command until a
-/// reset.
+/// last reset, and SafeStop latched until a reset: one category, a
+/// set-point that once at rest never moves again, and a ramp-down's force
+/// that never grows.
 #[derive(Clone, Debug, Default)]
 pub struct SessionOracle {
     model_validated: bool,
-    latched: Option<Command>,
+    latched: Option<Latched>,
+}
+
+/// What the oracle remembers of a stop.
+#[derive(Clone, Copy, Debug)]
+struct Latched {
+    category: Option<StopCategory>,
+    has_set_point: bool,
+    at_rest: Option<SetPoint>,
+    force: f64,
 }
 
 impl SessionOracle {
@@ -104,6 +115,7 @@ impl SessionOracle {
                         self.model_validated = false;
                         self.latched = None;
                     }
+                    (_, StateKind::SafeStop, _) => self.latched = None,
                     (StateKind::SafeStop, _, _) => {
                         return Err("SafeStop was left other than by a reset to Grasp")
                     }
@@ -137,19 +149,54 @@ impl SessionOracle {
         Ok(())
     }
 
-    /// Once in SafeStop, every command is the same stop command until a reset.
-    pub fn check_latched(&mut self, command: &Command) -> CheckResult {
-        match (&self.latched, command.state) {
-            (Some(latched), _) => ensure(
-                latched == command,
-                "the stop command changed before a reset",
-            ),
-            (None, StateKind::SafeStop) => {
-                self.latched = Some(*command);
-                Ok(())
-            }
-            (None, _) => Ok(()),
+    /// REQ-SM-006, REQ-STOP-002: once in SafeStop, until a reset, every
+    /// command has the same category and has a set-point or not as the
+    /// first; a set-point at rest (zero velocity and acceleration once the
+    /// kernel says the stop's move is over, `settled`) never moves again;
+    /// a ramp-down's force never grows.
+    pub fn check_latched(&mut self, command: &Command, settled: bool) -> CheckResult {
+        if command.state != StateKind::SafeStop {
+            return ensure(
+                self.latched.is_none(),
+                "SafeStop was left other than by a reset",
+            );
         }
+        let still = |s: &SetPoint| {
+            settled && s.velocity == PoseRate::ZERO && s.acceleration == PoseRate::ZERO
+        };
+        let force = command.wrench.fx.hypot(command.wrench.fz);
+        let Some(latched) = self.latched.as_mut() else {
+            self.latched = Some(Latched {
+                category: command.stop,
+                has_set_point: command.set_point.is_some(),
+                at_rest: command.set_point.filter(still),
+                force,
+            });
+            return Ok(());
+        };
+        ensure(
+            latched.category == command.stop,
+            "the stop category changed before a reset",
+        )?;
+        ensure(
+            latched.has_set_point == command.set_point.is_some(),
+            "a stop's set-point appeared or vanished before a reset",
+        )?;
+        if let Some(rest) = latched.at_rest {
+            ensure(
+                command.set_point == Some(rest),
+                "a stop's set-point at rest moved before a reset",
+            )?;
+        }
+        latched.at_rest = latched.at_rest.or(command.set_point.filter(still));
+        if command.stop == Some(StopCategory::RampDown) {
+            ensure(
+                force <= latched.force * (1.0 + 1e-9) + 1e-12,
+                "a ramp-down's force grew",
+            )?;
+        }
+        latched.force = force;
+        Ok(())
     }
 }
 
@@ -172,7 +219,8 @@ pub fn checked_step(
         )?;
     }
     oracle.observe_events(kernel)?;
-    oracle.check_latched(&command)?;
+    let settled = now.is_finite() && kernel.stopped().is_some_and(|s| s.is_settled(now));
+    oracle.check_latched(&command, settled)?;
     Ok(command)
 }
 

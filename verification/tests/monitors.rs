@@ -39,11 +39,18 @@ fn req_mon_003_fast_grasp_point_stops() {
             kernel.step(&frame(t, Pose::new(vx * t, vz * t, 0.0), LIFT_WRENCH), t);
         }
         assert_eq!(stop_limit(&kernel), Some(Limit::Speed), "({vx}, {vz})");
-        kernel.request(Request::Reset, 0.2).unwrap();
+        // A reset waits for the stop's set-point at rest and a still arm
+        // (REQ-STOP-003).
+        let stopped = Pose::new(vx * 0.2, vz * 0.2, 0.0);
+        for i in 21..=200 {
+            let t = f64::from(i) * 0.01;
+            kernel.step(&frame(t, stopped, LIFT_WRENCH), t);
+        }
+        kernel.request(Request::Reset, 2.0).unwrap();
         let elsewhere = Pose::new(0.1, 0.05, 0.0);
-        kernel.step(&frame(0.21, elsewhere, LIFT_WRENCH), 0.21);
-        kernel.request(Request::StartEstimation, 0.21).unwrap();
-        kernel.step(&frame(0.22, elsewhere, LIFT_WRENCH), 0.22);
+        kernel.step(&frame(2.01, elsewhere, LIFT_WRENCH), 2.01);
+        kernel.request(Request::StartEstimation, 2.01).unwrap();
+        kernel.step(&frame(2.02, elsewhere, LIFT_WRENCH), 2.02);
         assert_eq!(kernel.state().kind(), StateKind::Estimate, "({vx}, {vz})");
     }
 }

@@ -283,9 +283,11 @@ impl Session {
 }
 
 /// REQ-SM-005, REQ-SM-006, REQ-MON-001, REQ-MON-004, REQ-MON-005,
-/// REQ-MON-007, REQ-CMD-003: arbitrary sessions (frames, clocks and
-/// requests, NaN and infinities included) keep every per-step and session
-/// check of `limb_verification::checks`.
+/// REQ-MON-007, REQ-CMD-003, REQ-STOP-002: arbitrary sessions (frames,
+/// clocks and requests, NaN and infinities included) keep every per-step
+/// and session check of `limb_verification::checks` (a stop's latch: one
+/// category, a set-point that stays at rest, a ramp-down's force that
+/// never grows).
 #[test]
 fn arbitrary_sessions_keep_every_safety_property() {
     let visited = RefCell::new(BTreeSet::new());

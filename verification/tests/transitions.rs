@@ -3,8 +3,8 @@
 
 use limb_kernel::arm::JointAngles;
 use limb_kernel::state::TargetError;
-use limb_kernel::{Kernel, RefusalReason, Request, StateKind};
-use limb_verification::scenario::{arm, kernel_after_lift, kernel_in_grasp, TARGET};
+use limb_kernel::{Kernel, PathSample, RefusalReason, Request, StateKind};
+use limb_verification::scenario::{arm, kernel_after_lift, kernel_in_grasp, lift_frame, TARGET};
 
 const REQUESTS: [Request; 5] = [
     Request::StartEstimation,
@@ -35,7 +35,13 @@ fn kernel_in(state: StateKind) -> (Kernel, f64) {
         StateKind::SafeStop => {
             let mut kernel = kernel_in_grasp(&arm);
             kernel.request(Request::Stop, 0.0).unwrap();
-            (kernel, 0.0)
+            // The arm still for 1 s: the reset is then allowed (REQ-STOP-003).
+            let rest = lift_frame(&arm, 0.0);
+            for i in 1..=1000 {
+                let time = f64::from(i) * 1e-3;
+                kernel.step(&PathSample { time, ..rest }, time);
+            }
+            (kernel, 1.0)
         }
     }
 }

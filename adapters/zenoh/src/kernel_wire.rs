@@ -202,7 +202,8 @@ impl From<RefusalReason> for Fault {
             RefusalReason::Plan(p) => fault.caused_by(p.into()),
             RefusalReason::NotAllowedInState
             | RefusalReason::NoFreshMeasurement
-            | RefusalReason::InvalidTime => fault,
+            | RefusalReason::InvalidTime
+            | RefusalReason::ArmNotStill => fault,
         }
     }
 }
@@ -549,6 +550,10 @@ pub struct CommandReport {
     pub wrench: WrenchReport,
     /// Saturations that acted.
     pub saturation: SaturationReport,
+    /// In SafeStop, the stop's category (`hold`, `ramp_down`,
+    /// `motors_off`); absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stop: Option<limb_kernel::StopCategory>,
 }
 
 impl From<Command> for CommandReport {
@@ -563,6 +568,7 @@ impl From<Command> for CommandReport {
             set_point: c.set_point.map(Into::into),
             wrench: c.wrench.into(),
             saturation: c.saturation.into(),
+            stop: c.stop,
         }
     }
 }

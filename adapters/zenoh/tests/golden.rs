@@ -84,6 +84,7 @@ fn command_report() -> limb_zenoh::kernel_wire::CommandReport {
             speed: true,
             non_finite: false,
         },
+        stop: None,
     }
     .into()
 }

@@ -70,6 +70,15 @@ impl RateWindow {
         }
     }
 
+    /// True when the frames span the whole window (the rates are then
+    /// measured, not the zero of a window too short).
+    pub fn spans(&self) -> bool {
+        matches!(
+            (self.frames.front(), self.frames.back()),
+            (Some(old), Some(new)) if new.time - old.time >= self.window
+        )
+    }
+
     /// Velocity and force rate between the oldest and newest frame; zero
     /// until the frames span the whole window (the first `window` seconds
     /// after a start or reset, when a rate over a shorter span would be

@@ -1,0 +1,185 @@
+//! Stop categories at the kernel's interface: what each cause commands, the
+//! latch, and the reset that waits for a still arm (REQ-STOP-001..003).
+
+use limb_kernel::geometry::{Pose, Wrench};
+use limb_kernel::monitor::Limit;
+use limb_kernel::state::RefusalReason;
+use limb_kernel::stop::{StopCategory, RAMP_DOWN_TIME};
+use limb_kernel::{Command, CommandMode, Kernel, KernelConfig, PathSample, Request, StateKind};
+use limb_kernel::{State, StopReason};
+
+const PERIOD: f64 = 0.001;
+
+/// The arm held lifted: 0.12 m up, the robot carrying 6 N of its weight
+/// (f_ext = −6 N in z: the set-point that holds it is 3 cm higher).
+const LIFTED: Pose = Pose::new(0.05, 0.12, 0.3);
+const WEIGHT: Wrench = Wrench::new(0.0, -6.0, 0.0);
+
+fn frame(time: f64, pose: Pose, wrench: Wrench) -> PathSample {
+    PathSample { time, pose, wrench }
+}
+
+/// A kernel in Grasp that has held the lifted arm for 0.2 s, and the time.
+fn holding_the_lifted_arm() -> (Kernel, f64) {
+    let mut kernel = Kernel::new(KernelConfig::default()).unwrap();
+    let mut time = 0.0;
+    for _ in 0..200 {
+        let command = kernel.step(&frame(time, LIFTED, WEIGHT), time);
+        assert_eq!(command.state, StateKind::Grasp);
+        time += PERIOD;
+    }
+    (kernel, time)
+}
+
+fn steps(kernel: &mut Kernel, time: &mut f64, n: usize, pose: Pose, wrench: Wrench) -> Command {
+    let mut last = None;
+    for _ in 0..n {
+        last = Some(kernel.step(&frame(*time, pose, wrench), *time));
+        *time += PERIOD;
+    }
+    last.unwrap()
+}
+
+/// REQ-STOP-001: a stop request is a hold: the stop commands carry the
+/// category, a set-point that keeps carrying the arm's weight (the Grasp
+/// hold, 3 cm above the measured pose would be x − f_ext/K; Grasp held the
+/// measured pose here, so the hold moves to x − f_ext/K), and the impedance
+/// law's wrench about it, never zero while the arm hangs on the robot.
+#[test]
+fn req_stop_001_a_stop_request_holds_the_arm() {
+    let (mut kernel, mut time) = holding_the_lifted_arm();
+    assert_eq!(kernel.request(Request::Stop, time), Ok(StateKind::SafeStop));
+    let stop = kernel.stopped().unwrap();
+    assert_eq!(stop.reason(), StopReason::Operator);
+    assert_eq!(stop.category(), StopCategory::Hold);
+    let command = steps(&mut kernel, &mut time, 1000, LIFTED, WEIGHT);
+    assert_eq!(command.mode, CommandMode::Stop);
+    assert_eq!(command.stop, Some(StopCategory::Hold));
+    let held = command.set_point.unwrap().pose;
+    assert!((held.z - (LIFTED.z + 0.03)).abs() < 1e-3, "{held:?}");
+    assert!((command.wrench.fz - 6.0).abs() < 0.5, "{command:?}");
+}
+
+/// REQ-STOP-001: a stale sensor ramps the robot's force down: the
+/// set-point goes to the last trusted measured pose over
+/// `RAMP_DOWN_TIME` and the wrench to zero.
+#[test]
+fn req_stop_001_a_stale_sensor_ramps_the_wrench_down() {
+    let (mut kernel, mut time) = holding_the_lifted_arm();
+    let before = kernel.step(&frame(time, LIFTED, WEIGHT), time);
+    time += PERIOD;
+    // The same frame, 0.2 s later: stale.
+    let stale = frame(time - PERIOD, LIFTED, WEIGHT);
+    let first = kernel.step(&stale, time + 0.2);
+    assert_eq!(first.stop, Some(StopCategory::RampDown));
+    match kernel.stopped().unwrap().reason() {
+        StopReason::Monitor(v) => assert_eq!(v.limit, Limit::StaleSensor),
+        other => panic!("{other:?}"),
+    }
+    // Continuous: the first stop command is where the last command was.
+    assert_eq!(
+        first.set_point.unwrap().pose,
+        before.set_point.unwrap().pose
+    );
+    let mut t = time + 0.2;
+    let mut last = first;
+    while t < time + 0.2 + RAMP_DOWN_TIME + 0.01 {
+        t += PERIOD;
+        let command = kernel.step(&stale, t);
+        let (a, b) = (
+            last.set_point.unwrap().pose,
+            command.set_point.unwrap().pose,
+        );
+        assert!((a.z - b.z).abs() < 1e-4, "a step at {t}: {a:?} → {b:?}");
+        last = command;
+    }
+    assert_eq!(last.wrench, Wrench::ZERO);
+    assert_eq!(last.set_point.unwrap().pose, LIFTED);
+}
+
+/// REQ-STOP-003, REQ-SM-006: the stop stays latched with its first reason until a
+/// reset; a reset is refused while the stop's set-point moves, while the
+/// arm moves, and without a fresh measurement, and accepted once the arm
+/// is still: Grasp then holds the stop's set-point at rest.
+#[test]
+fn req_stop_003_a_reset_waits_for_a_still_arm() {
+    let (mut kernel, mut time) = holding_the_lifted_arm();
+    assert_eq!(kernel.request(Request::Stop, time), Ok(StateKind::SafeStop));
+    steps(&mut kernel, &mut time, 10, LIFTED, WEIGHT);
+    let not_still = Err(RefusalReason::ArmNotStill);
+    // The hold's set-point is still moving to x − f_ext/K.
+    assert_eq!(
+        kernel.request(Request::Reset, time).map_err(|r| r.reason),
+        not_still
+    );
+    // A second cause does not replace the first.
+    let _ = kernel.step(&frame(time, LIFTED, Wrench::new(f64::NAN, 0.0, 0.0)), time);
+    assert_eq!(kernel.request(Request::Stop, time), Ok(StateKind::SafeStop));
+    assert_eq!(kernel.stopped().unwrap().reason(), StopReason::Operator);
+    let command = steps(&mut kernel, &mut time, 1000, LIFTED, WEIGHT);
+    let rest = command.set_point.unwrap();
+    // The arm moving at 5 cm/s.
+    for k in 0..100 {
+        let moved = Pose::new(
+            LIFTED.x + 0.05 * f64::from(k) * PERIOD,
+            LIFTED.z,
+            LIFTED.psi,
+        );
+        kernel.step(&frame(time, moved, WEIGHT), time);
+        time += PERIOD;
+    }
+    assert_eq!(
+        kernel.request(Request::Reset, time).map_err(|r| r.reason),
+        not_still
+    );
+    // Still again, but the last frame is 0.2 s old.
+    let moved = Pose::new(LIFTED.x + 0.005, LIFTED.z, LIFTED.psi);
+    steps(&mut kernel, &mut time, 200, moved, WEIGHT);
+    assert_eq!(
+        kernel
+            .request(Request::Reset, time + 0.2)
+            .map_err(|r| r.reason),
+        not_still
+    );
+    assert_eq!(kernel.state().kind(), StateKind::SafeStop);
+    assert_eq!(kernel.request(Request::Reset, time), Ok(StateKind::Grasp));
+    let State::Grasp(grasp) = kernel.state() else {
+        panic!("not in Grasp")
+    };
+    assert_eq!(grasp.held(), Some(rest.pose));
+    let command = kernel.step(&frame(time, moved, WEIGHT), time);
+    assert_eq!(
+        command.set_point,
+        Some(rest),
+        "the reset stepped the set-point"
+    );
+    assert_eq!(command.stop, None);
+}
+
+/// REQ-STOP-001, REQ-CMD-003: a non-finite command is the only motors-off
+/// cause (no set-point, no wrench: `Command::check` refuses either).
+#[test]
+fn req_stop_001_motors_off_commands_nothing() {
+    assert_eq!(
+        StopReason::NonFiniteCommand.category(),
+        StopCategory::MotorsOff
+    );
+    for reason in [StopReason::Operator, StopReason::PathBufferFull] {
+        assert_ne!(reason.category(), StopCategory::MotorsOff);
+    }
+    let limits = KernelConfig::default().limits;
+    let motors_off = Command {
+        state: StateKind::SafeStop,
+        mode: CommandMode::Stop,
+        set_point: None,
+        wrench: Wrench::ZERO,
+        saturation: Default::default(),
+        stop: Some(StopCategory::MotorsOff),
+    };
+    assert_eq!(motors_off.check(&limits), Ok(()));
+    let pushing = Command {
+        wrench: Wrench::new(0.0, 1.0, 0.0),
+        ..motors_off
+    };
+    assert!(pushing.check(&limits).is_err());
+}
