@@ -258,11 +258,12 @@ fn kernel_session(
         ..SessionPlan::default()
     };
     let ended = run_robot(&mut robot, options, plan)?;
-    robot.switch_off();
+    robot.finish();
     let record = robot.record();
     let outcome = ended.outcome.as_ref().ok();
     let summary = json!({
         "kernel_state": ended.kernel.state().kind().title(),
+        "stop_category": ended.kernel.stopped().map(|s| s.category().name()),
         "kernel_steps": outcome.map(|o| o.steps),
         "stale_steps": outcome.map(|o| o.stale_steps),
         "frames": record.frames,

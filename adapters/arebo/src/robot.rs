@@ -32,6 +32,15 @@
 //! frame S, → R0 → τ_d = J_aᵀ f (the target is the interaction torque the
 //! device adds to its gravity compensation). ty is dropped: three actuated
 //! joints place a force at the spherical joint, never a moment.
+//!
+//! Stops ([`limb_kernel::stop`]): in a hold the kernel's wrench is the
+//! impedance law's about its held set-point, so the device keeps its
+//! gravity compensation plus the held arm's weight; in a ramp-down that
+//! wrench falls to zero over 1 s, leaving gravity compensation; only a
+//! motors-off stop switches the motors off (control type 0: the device's
+//! ≈ 32 N and the arm then rest on the person). At the end of a session
+//! ([`AreboRobot::finish`]) the device is handed to its own fallback,
+//! gravity compensation, unless the kernel's last command was motors off.
 
 use crate::control::{interaction_force, GravityParameters};
 use crate::encoder::{actuated_angles, Encoder};
@@ -43,7 +52,7 @@ use crate::link::{
 use crate::protocol::{Command as DeviceCommand, ControlType};
 use crate::safety::{check_device, AreboViolation, SafetyLimits};
 use limb_kernel::geometry::{Pose, Wrench};
-use limb_kernel::{Command, PathSample};
+use limb_kernel::{Command, PathSample, StopCategory};
 use limb_session::{ArrivalClock, Frame, Robot, Sensed};
 use nalgebra::{Rotation3, Vector3};
 use std::collections::VecDeque;
@@ -138,6 +147,11 @@ pub struct AreboRecord {
     pub silent_polls: u64,
     /// Commands whose torque target could not be formed (held at zero).
     pub held: u64,
+    /// Kernel stop commands by category code (1 hold, 2 ramp_down,
+    /// 3 motors_off; index 0 unused).
+    pub stop_commands: [u64; 4],
+    /// True once a motors-off stop switched the motors off.
+    pub motors_off: bool,
 }
 
 /// AREBO behind a serial [`Session`], in torque mode.
@@ -207,11 +221,25 @@ impl AreboRobot {
         &self.session
     }
 
-    /// Motors off (the end of a session, or a stop).
+    /// Motors off (a motors-off stop, or a caller that wants it).
     pub fn switch_off(&mut self) {
+        self.record.motors_off = true;
         let _ = self
             .session
             .send(DeviceCommand::SetControlType(ControlType::Off));
+    }
+
+    /// The end of a session: the device to its own fallback, gravity
+    /// compensation (it carries its own weight; the arm rests on its
+    /// support), or motors off after a motors-off stop.
+    pub fn finish(&mut self) {
+        if self.record.motors_off {
+            self.switch_off();
+        } else {
+            let _ = self.session.send(DeviceCommand::SetControlType(
+                ControlType::GravityCompensation,
+            ));
+        }
     }
 
     /// The kernel frame of one stream frame (recording frame S at the
@@ -274,7 +302,7 @@ impl Robot for AreboRobot {
     fn sense(&mut self) -> Result<Sensed, AreboStop> {
         loop {
             if self.end.is_some_and(|end| Instant::now() >= end) {
-                self.switch_off();
+                self.finish();
                 return Ok(Sensed::Ended);
             }
             if let SessionState::SafeStop(cause) = self.session.state() {
@@ -302,6 +330,15 @@ impl Robot for AreboRobot {
     }
 
     fn actuate(&mut self, command: &Command) -> Result<(), AreboStop> {
+        if let Some(category) = command.stop {
+            self.record.stop_commands[usize::from(category.code()).min(3)] += 1;
+        }
+        if command.stop == Some(StopCategory::MotorsOff) || self.record.motors_off {
+            if !self.record.motors_off {
+                self.switch_off();
+            }
+            return Ok(());
+        }
         let torques = match (self.frame, self.last_q) {
             (Some(frame), Some(q)) => kinematics::joint_torques(q, &frame.to_r0(&command.wrench)),
             _ => Vector3::zeros(),

@@ -196,3 +196,165 @@ fn a_scripted_session_on_the_held_arm_validates_and_manipulates() {
     assert!((model.upper_arm_length - 0.30).abs() < 5e-3, "{model:?}");
     assert!((model.forearm_length - 0.20).abs() < 5e-3, "{model:?}");
 }
+
+/// The scripted operator until `stop_at` [s], then a stop request; the
+/// session runs on for 2 s and records the grasp's height and the stop
+/// commands' categories from the frames and commands.
+struct StopAt {
+    operator: Operator,
+    stop_at: f64,
+    stopped_at: Option<f64>,
+    height: Option<f64>,
+    lowest: f64,
+    now: f64,
+    categories: Vec<Option<limb_kernel::StopCategory>>,
+}
+
+impl Supervisor for StopAt {
+    fn before_step(&mut self, kernel: &mut Kernel, now: f64, following: bool) {
+        self.now = now;
+        if self.stopped_at.is_none() && now >= self.stop_at {
+            kernel.request(limb_kernel::Request::Stop, now).unwrap();
+            self.stopped_at = Some(now);
+        } else {
+            self.operator.before_step(kernel, now, following);
+        }
+    }
+
+    fn after_step(
+        &mut self,
+        kernel: &Kernel,
+        frame: &limb_kernel::PathSample,
+        command: &limb_kernel::Command,
+        now: f64,
+    ) {
+        if self.stopped_at.is_some() {
+            self.height.get_or_insert(frame.pose.z);
+            self.lowest = self.lowest.min(frame.pose.z);
+            self.categories.push(command.stop);
+        }
+        self.operator.after_step(kernel, frame, command, now);
+    }
+
+    fn finished(&self, _: StateKind, _: bool) -> bool {
+        self.stopped_at.is_some_and(|at| self.now >= at + 2.0)
+    }
+}
+
+/// REQ-STOP-001: a stop request during the estimation lift is a hold on
+/// AREBO: every stop command is a hold, the device runs torque mode (its
+/// gravity compensation plus the held arm's weight) on every frame of the
+/// session, never motors off, and the wrist sags at most 2 mm over the
+/// 2 s after the stop; at the end the device is handed to gravity
+/// compensation, not switched off.
+#[test]
+fn req_stop_001_a_hold_stop_keeps_arebo_carrying_the_arm() {
+    let (device, mut robot) = on_simulated_held_arm(3_000).unwrap();
+    let mut kernel = kernel();
+    let plan = SessionPlan {
+        rate: 1.0 / SAMPLE_PERIOD,
+        ..SessionPlan::default()
+    };
+    let mut supervisor = StopAt {
+        operator: Operator::new(plan),
+        stop_at: 6.0,
+        stopped_at: None,
+        height: None,
+        lowest: f64::INFINITY,
+        now: 0.0,
+        categories: Vec::new(),
+    };
+    let mut events = Events::default();
+    let outcome = limb_session::run(&mut kernel, &mut robot, &mut supervisor, &mut events);
+    let record = robot.record();
+    robot.finish();
+    drop(robot);
+    let device = device.join().unwrap();
+    assert!(outcome.is_ok(), "{outcome:?}");
+    assert!(supervisor.stopped_at.is_some(), "{:?}", events.0);
+    assert_eq!(kernel.state().kind(), StateKind::SafeStop);
+    let stop = kernel.stopped().unwrap();
+    assert_eq!(stop.category(), limb_kernel::StopCategory::Hold);
+    assert!(supervisor
+        .categories
+        .iter()
+        .all(|c| *c == Some(limb_kernel::StopCategory::Hold)));
+    assert!(record.stop_commands[1] > 300, "{record:?}");
+    assert!(!record.motors_off);
+    let sag = supervisor.height.unwrap() - supervisor.lowest;
+    eprintln!("AREBO hold stop at 6 s: sag {:.2} mm", sag * 1e3);
+    assert!(sag <= 2e-3, "sag {sag} m");
+    let session_frames = usize::try_from(record.frames).unwrap();
+    let seen = &device.control[..session_frames.min(device.control.len())];
+    assert!(
+        seen.iter()
+            .skip(1)
+            .all(|c| *c == limb_arebo::protocol::ControlType::Torque),
+        "{seen:?}"
+    );
+    assert!(!device
+        .control
+        .contains(&limb_arebo::protocol::ControlType::Off));
+}
+
+/// REQ-STOP-001: a motors-off stop command is the only one that switches
+/// AREBO's motors off (control type 0), and the robot sends nothing more.
+#[test]
+fn req_stop_001_motors_off_switches_arebo_off() {
+    use limb_kernel::geometry::Wrench;
+    use limb_kernel::{Command, CommandMode, StopCategory};
+    use limb_session::{Robot, Sensed};
+    let (device, mut robot) = on_simulated_held_arm(400).unwrap();
+    let mut command = Command {
+        state: StateKind::Grasp,
+        mode: CommandMode::Hold,
+        set_point: None,
+        wrench: Wrench::ZERO,
+        saturation: Default::default(),
+        stop: None,
+    };
+    let mut frames = 0;
+    while frames < 200 {
+        match robot.sense().unwrap() {
+            Sensed::Frame(_) => frames += 1,
+            Sensed::Silent(_) => {}
+            Sensed::Ended => break,
+        }
+        if frames == 100 {
+            command = Command {
+                state: StateKind::SafeStop,
+                mode: CommandMode::Stop,
+                stop: Some(StopCategory::MotorsOff),
+                ..command
+            };
+        }
+        robot.actuate(&command).unwrap();
+        if robot.record().motors_off {
+            break;
+        }
+    }
+    let record = robot.record();
+    assert!(record.motors_off, "{record:?}");
+    assert_eq!(record.stop_commands[3], 1);
+    // The device streams on with its motors off (its status then no longer
+    // says torque mode: the host reads that as a device stop).
+    for _ in 0..50 {
+        match robot.sense() {
+            Ok(Sensed::Ended) | Err(_) => break,
+            Ok(_) => robot.actuate(&command).unwrap(),
+        }
+    }
+    robot.finish();
+    drop(robot);
+    let device = device.join().unwrap();
+    assert!(
+        device.control.contains(&limb_arebo::protocol::ControlType::Off),
+        "the device never ran motors off"
+    );
+    let first_off = device
+        .control
+        .iter()
+        .position(|c| *c == limb_arebo::protocol::ControlType::Off)
+        .unwrap();
+    assert!(first_off >= 99, "motors off before the stop: {first_off}");
+}
