@@ -307,9 +307,13 @@ fn settings(backlash_deg: f64) -> Result<CalibrationSettings, CliError> {
 /// value and bound.
 fn stop_json(cause: StopCause) -> serde_json::Value {
     match cause {
-        StopCause::PortLost => json!({ "cause": "port_lost" }),
+        StopCause::PortLost => json!({
+            "cause": "port_lost",
+            "category": cause.category().name(),
+        }),
         StopCause::Violation(v) => json!({
             "cause": "violation",
+            "category": cause.category().name(),
             "limit": v.limit.name(),
             "code": v.limit.code(),
             "value": v.value,
@@ -423,7 +427,7 @@ fn stream(device: &Path, seconds: f64, alpha: f64, backlash_deg: f64) -> Result<
                 Output::Target { desired, angles } => {
                     last_angles = Some(angles);
                     let target = [desired.x as f32, desired.y as f32, desired.z as f32];
-                    // A failed write latches the session's stop (motors off).
+                    // A failed write latches the session's stop.
                     if session.send(Command::SetControlTarget(target)).is_err() {
                         break;
                     }
@@ -436,7 +440,7 @@ fn stream(device: &Path, seconds: f64, alpha: f64, backlash_deg: f64) -> Result<
             }
         }
     }
-    let _ = session.send(Command::SetControlType(ControlType::Off));
+    session.finish();
     let stats = session.stats();
     let summary = json!({
         "model": model_json(&model),

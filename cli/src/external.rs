@@ -289,7 +289,14 @@ pub fn plant_session(
             });
         }
     };
-    let (mut report, last_now) = session(&mut kernel, &mut robot, &plan, log.as_mut(), stop_at, truth_of);
+    let (mut report, last_now) = session(
+        &mut kernel,
+        &mut robot,
+        &plan,
+        log.as_mut(),
+        stop_at,
+        truth_of,
+    );
     if robot.failure().is_some() {
         // The robot failed: the kernel stops (its trace says so).
         let _ = kernel.request(Request::Stop, last_now);

@@ -22,7 +22,7 @@ mod zenoh;
 use crate::error::{print_json, CliError};
 use clap::{Args, Subcommand};
 use limb_kernel::trace::{Cause, Event, TraceEvent};
-use limb_kernel::{Request, StateKind, StopReason};
+use limb_kernel::{Request, StateKind, StopCategory, StopReason};
 use serde_json::{json, Value};
 use std::collections::BTreeMap;
 use std::io::{self, Write};
@@ -384,14 +384,15 @@ fn stop_name(cause: &Cause) -> String {
     }
 }
 
-/// The cause of the first transition into SafeStop among `events`.
-fn first_stop(events: &[TraceEvent]) -> Option<String> {
+/// The cause of the first transition into SafeStop among `events`, in
+/// words, and its stop category.
+fn first_stop(events: &[TraceEvent]) -> Option<(String, Option<StopCategory>)> {
     events.iter().find_map(|event| match &event.event {
         Event::Transition {
             to: StateKind::SafeStop,
             cause,
             ..
-        } => Some(stop_name(cause)),
+        } => Some((stop_name(cause), cause.stop_category())),
         _ => None,
     })
 }

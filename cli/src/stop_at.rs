@@ -4,8 +4,9 @@
 //! # Theory of operation
 //! [`StopAt`] wraps any supervisor (the scripted operator of `limb run`,
 //! or whatever supervises an external plant): until T it only passes the
-//! session on; on the first step at or after T it asks the kernel for a
-//! stop (`Request::Stop`, as an emergency stop button does) and records
+//! session on; on the first step at or after T (counted from the
+//! session's first step) it asks the kernel for a stop (`Request::Stop`,
+//! as an emergency stop button does) and records
 //! the state the kernel was in; from then on it watches every step's frame
 //! for [`WINDOW`] and keeps the session running that long, whatever the
 //! wrapped supervisor says. Everything is measured from the robot's own
@@ -33,7 +34,7 @@ pub const WINDOW: f64 = 2.0;
 pub struct StopReport {
     /// Session time the stop was asked at [s].
     pub at: f64,
-    /// The kernel's state when it was asked (lower case).
+    /// The kernel's state when it was asked (its vocabulary name).
     pub state: String,
     /// The stop's cause: `emergency_stop` for this request, else the
     /// kernel's reason (a monitor by its limit's name).
@@ -70,6 +71,9 @@ struct Stopped {
 pub struct StopAt<S> {
     inner: S,
     at: Option<f64>,
+    /// Kernel time of the session's first step [s] (a plant's clock may
+    /// start anywhere: session time counts from here).
+    start: Option<f64>,
     now: f64,
     stopped: Option<Stopped>,
 }
@@ -80,6 +84,7 @@ impl<S> StopAt<S> {
         Self {
             inner,
             at,
+            start: None,
             now: f64::NEG_INFINITY,
             stopped: None,
         }
@@ -95,8 +100,8 @@ impl<S> StopAt<S> {
             None => "none".to_owned(),
         };
         Some(StopReport {
-            at: s.at,
-            state: format!("{:?}", s.state).to_lowercase(),
+            at: s.at - self.start.unwrap_or(s.at),
+            state: s.state.name().to_owned(),
             cause,
             sag_m: s.height.map_or(0.0, |h| (h - s.lowest).max(0.0)),
             max_force_n: s.max_force,
@@ -130,8 +135,9 @@ pub fn plan(plan: SessionPlan, at: Option<f64>) -> SessionPlan {
 impl<S: Supervisor> Supervisor for StopAt<S> {
     fn before_step(&mut self, kernel: &mut Kernel, now: f64, following: bool) {
         self.now = now;
+        let start = *self.start.get_or_insert(now);
         if let (Some(at), None) = (self.at, self.stopped) {
-            if now >= at {
+            if now - start >= at {
                 let state = kernel.state().kind();
                 let ours = state != StateKind::SafeStop;
                 // A stop is never refused (REQ-SM-004); in SafeStop it
@@ -238,6 +244,21 @@ mod tests {
         assert_eq!(report.category, "hold");
         assert!((report.sag_m - 0.003).abs() < 1e-12, "{report:?}");
         assert_eq!(report.max_force_n, 6.0);
+    }
+
+    /// T counts from the session's first step, not from kernel time 0 (a
+    /// plant whose clock starts at 1000.5 s).
+    #[test]
+    fn the_stop_time_is_session_time() {
+        let mut kernel = Kernel::new(KernelConfig::default()).unwrap();
+        let mut stop = StopAt::new(Never, Some(0.5));
+        let command = kernel.step(&frame(1000.5, 0.0, 0.0), 1000.5);
+        for now in [1000.5, 1000.9, 1001.0] {
+            stop.before_step(&mut kernel, now, true);
+            stop.after_step(&kernel, &frame(now, 0.01, 0.0), &command, now);
+            assert_eq!(stop.report().is_some(), now >= 1001.0, "{now}");
+        }
+        assert_eq!(stop.report().unwrap().at, 0.5);
     }
 
     /// Without a stop time the wrapper is the supervisor it wraps.

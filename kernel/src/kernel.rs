@@ -227,7 +227,8 @@ impl Kernel {
             self.rates.push(*frame);
             self.last_frame = Some(*frame);
         }
-        if now.is_finite() && !(now <= self.stop_clock) {
+        // stop_clock is NaN until the first finite stop step.
+        if now.is_finite() && (self.stop_clock.is_nan() || now > self.stop_clock) {
             self.stop_clock = now;
         }
         let now = self.stop_clock;

@@ -38,7 +38,8 @@
 use crate::geometry::{Pose, PoseRate, Wrench};
 use crate::monitor::Limit;
 use crate::motion::{SetPoint, MINIMUM_JERK_PEAK_RATE};
-use crate::state::StopReason;
+use crate::state::{Request, StopReason};
+use crate::trace::Cause;
 
 /// What a stop does to the arm. Codes and names are stable (logs, wire
 /// protocols, `limb run --stop-at`'s JSON).
@@ -69,15 +70,6 @@ impl StopCategory {
     /// Stable numeric code.
     pub const fn code(self) -> u8 {
         self as u8
-    }
-
-    /// Stable snake_case name.
-    pub const fn name(self) -> &'static str {
-        match self {
-            StopCategory::Hold => "hold",
-            StopCategory::RampDown => "ramp_down",
-            StopCategory::MotorsOff => "motors_off",
-        }
     }
 
     /// True when the robot keeps carrying the arm's weight.
@@ -139,18 +131,17 @@ impl StopReason {
             },
         }
     }
+}
 
-    /// Stable snake_case name of the reason (as the Zenoh wire spells
-    /// it; a monitor's limit has its own, [`Limit::name`]).
-    pub const fn name(&self) -> &'static str {
+impl Cause {
+    /// The stop category of a transition into SafeStop with this cause (a
+    /// stop request is the operator's stop); `None` for a cause that never
+    /// stops.
+    pub const fn stop_category(&self) -> Option<StopCategory> {
         match self {
-            StopReason::Monitor(_) => "monitor",
-            StopReason::Operator => "operator",
-            StopReason::EstimationFailed(_) => "estimation_failed",
-            StopReason::ModelRejected(_) => "model_rejected",
-            StopReason::PathBufferFull => "path_buffer_full",
-            StopReason::PlanFailed(_) => "plan_failed",
-            StopReason::NonFiniteCommand => "non_finite_command",
+            Cause::Stop(reason) => Some(reason.category()),
+            Cause::Request(Request::Stop) => Some(StopReason::Operator.category()),
+            Cause::Request(_) | Cause::ModelValidated => None,
         }
     }
 }
@@ -320,20 +311,6 @@ mod tests {
         }
     }
 
-    /// REQ-STOP-001: the codes and names are stable.
-    #[test]
-    fn req_stop_001_category_codes_and_names_are_stable() {
-        let table = [
-            (StopCategory::Hold, 1, "hold"),
-            (StopCategory::RampDown, 2, "ramp_down"),
-            (StopCategory::MotorsOff, 3, "motors_off"),
-        ];
-        for (category, code, name) in table {
-            assert_eq!((category.code(), category.name()), (code, name));
-        }
-        assert_eq!(StopCategory::ALL.map(StopCategory::code), [1, 2, 3]);
-    }
-
     /// REQ-STOP-001: each cause has the category of the table in the module
     /// docs (and of spec/hazards.md); changing one fails here.
     #[test]
@@ -373,9 +350,6 @@ mod tests {
         for (reason, category) in table {
             assert_eq!(reason.category(), category, "{reason:?}");
         }
-        assert_eq!(StopReason::Operator.name(), "operator");
-        assert_eq!(monitor(Limit::StaleSensor).name(), "monitor");
-        assert_eq!(Limit::StaleSensor.name(), "stale_sensor");
     }
 
     /// REQ-STOP-002: the move starts exactly at the set-point commanded at

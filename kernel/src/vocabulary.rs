@@ -24,6 +24,7 @@ use crate::lift::LiftEnd;
 use crate::monitor::{Limit, Violation};
 use crate::motion::PlanError;
 use crate::state::{Refusal, RefusalReason, Request, StateKind, StopReason, TargetError};
+use crate::stop::StopCategory;
 use crate::trace::{Cause, Event, TraceEvent};
 use crate::validate::Rejection;
 use core::fmt::{self, Display, Formatter};
@@ -234,6 +235,7 @@ impl RefusalReason {
             RefusalReason::InvalidTime => "invalid_time",
             RefusalReason::Target(_) => "target",
             RefusalReason::Plan(_) => "plan",
+            RefusalReason::ArmNotStill => "arm_not_still",
         }
     }
 }
@@ -366,6 +368,23 @@ impl Display for StopReason {
     }
 }
 
+impl StopCategory {
+    /// Stable snake_case name.
+    pub const fn name(self) -> &'static str {
+        match self {
+            StopCategory::Hold => "hold",
+            StopCategory::RampDown => "ramp_down",
+            StopCategory::MotorsOff => "motors_off",
+        }
+    }
+}
+
+impl Display for StopCategory {
+    fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 impl LiftEnd {
     /// Stable snake_case name.
     pub const fn name(&self) -> &'static str {
@@ -460,7 +479,8 @@ mod tests {
 
     /// Every code and name of the vocabulary, pinned: a renamed or
     /// renumbered variant fails here (and PROTOCOL.md's table lists the
-    /// same, "Faults").
+    /// same, "Faults"); the stop categories' codes and names too
+    /// (REQ-STOP-001).
     #[test]
     fn every_code_and_name_is_pinned() {
         let limits = [
@@ -518,6 +538,7 @@ mod tests {
                 "target",
             ),
             (RefusalReason::Plan(PlanError::NonFinite), 5, "plan"),
+            (RefusalReason::ArmNotStill, 6, "arm_not_still"),
         ];
         for (reason, code, name) in refusals {
             assert_eq!((reason.code(), reason.name()), (code, name));
@@ -624,6 +645,15 @@ mod tests {
         for (end, code, name) in ends {
             assert_eq!((end.code(), end.name()), (code, name));
         }
+        let categories = [
+            (StopCategory::Hold, 1, "hold"),
+            (StopCategory::RampDown, 2, "ramp_down"),
+            (StopCategory::MotorsOff, 3, "motors_off"),
+        ];
+        for (category, code, name) in categories {
+            assert_eq!((category.code(), category.name()), (code, name));
+        }
+        assert_eq!(StopCategory::ALL.map(StopCategory::code), [1, 2, 3]);
     }
 
     /// The display text carries the numbers with their units and no Rust

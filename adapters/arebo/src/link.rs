@@ -8,9 +8,12 @@
 //! [`crate::protocol::Decoder`] and checks their age with
 //! [`crate::safety::check_fresh`]. A stale stream, a read or write error, a
 //! vanished port or a control type the device does not confirm latches
-//! [`SessionState::SafeStop`] and commands the device's motors off (best
-//! effort: the device also stops assisting on its own when heartbeats stop
-//! for 1 s). The device's status and error bits are checked by the caller
+//! [`SessionState::SafeStop`] and commands the device what the stop's
+//! category says ([`StopCause::category`]): gravity compensation, the
+//! device's own fallback (it carries its own ≈ 32 N; the host can no longer
+//! add the held arm's weight), or motors off only where the device's state
+//! is not the one the host knows (best effort: the device also stops
+//! assisting on its own when heartbeats stop for 1 s). The device's status and error bits are checked by the caller
 //! against what it expects ([`crate::safety::check_device`]): the
 //! supervisor in torque mode, the calibration in gravity compensation.
 //!
@@ -30,6 +33,8 @@ use crate::protocol::{
 };
 use crate::safety::{self, AreboLimit, AreboViolation, SafetyLimits};
 use crate::sim::{self, RobotSensor, Setup, ShoulderJointModel};
+use limb_kernel::monitor::Violation;
+use limb_kernel::{StopCategory, StopReason};
 use limb_session::clock::AlignedClock;
 use nalgebra::Vector3;
 use serialport::{SerialPort, TTYPort};
@@ -107,6 +112,43 @@ pub enum StopCause {
     PortLost,
 }
 
+impl StopCause {
+    /// The stop category of the host's own stop (`limb_kernel::stop`): a
+    /// limit the kernel also has, the kernel's category; a shoulder angle
+    /// out of range a hold (as the kernel's joint limits); the device's
+    /// heartbeat or torque-sensor fault and a lost port a ramp-down (the
+    /// device has stopped applying the host's target, or the host cannot
+    /// reach it: its gravity compensation remains); an unknown device error
+    /// or a control type the host did not set motors off (the device is
+    /// not in the state the host knows, so holding is itself the hazard).
+    /// The link applies [`StopCategory::MotorsOff`] as control type 0 and
+    /// both others as gravity compensation.
+    pub fn category(&self) -> StopCategory {
+        let StopCause::Violation(v) = self else {
+            return StopCategory::RampDown;
+        };
+        match v.limit {
+            AreboLimit::Kernel(limit) => {
+                StopReason::Monitor(Violation::new(limit, v.value, v.bound)).category()
+            }
+            AreboLimit::Flexion | AreboLimit::Abduction => StopCategory::Hold,
+            AreboLimit::DeviceHeartbeatMissing | AreboLimit::TorqueSensorFault => {
+                StopCategory::RampDown
+            }
+            AreboLimit::UnknownDeviceError | AreboLimit::ControlType => StopCategory::MotorsOff,
+        }
+    }
+}
+
+/// The control type that applies `category` on AREBO: motors off only for
+/// [`StopCategory::MotorsOff`], else the device's gravity compensation.
+pub fn stop_control(category: StopCategory) -> ControlType {
+    match category {
+        StopCategory::MotorsOff => ControlType::Off,
+        StopCategory::Hold | StopCategory::RampDown => ControlType::GravityCompensation,
+    }
+}
+
 impl core::fmt::Display for StopCause {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
@@ -121,7 +163,7 @@ impl core::fmt::Display for StopCause {
 pub enum SessionState {
     /// Frames arrive and are fresh.
     Running,
-    /// Latched; commands the device off.
+    /// Latched; the device given its stop category's control type.
     SafeStop(StopCause),
 }
 
@@ -248,14 +290,30 @@ impl Session {
     }
 
     /// Latches the safe stop with `cause` (the first cause is kept) and
-    /// commands the motors off, best effort: the port may be gone.
+    /// commands the device its category's control type ([`stop_control`]),
+    /// best effort: the port may be gone.
     pub fn stop(&mut self, cause: StopCause) {
         if self.state == SessionState::Running {
             self.state = SessionState::SafeStop(cause);
+            let control = stop_control(cause.category());
             let _ = self
                 .port
-                .write_all(&Command::SetControlType(ControlType::Off).encode());
+                .write_all(&Command::SetControlType(control).encode());
         }
+    }
+
+    /// The end of a session: a stopped session gives the device its stop
+    /// category's control type again, a running one gravity compensation,
+    /// the device's own fallback (it carries its own weight; the arm rests
+    /// on its support). Best effort: the port may be gone.
+    pub fn finish(&mut self) {
+        let control = match self.state {
+            SessionState::SafeStop(cause) => stop_control(cause.category()),
+            SessionState::Running => ControlType::GravityCompensation,
+        };
+        let _ = self
+            .port
+            .write_all(&Command::SetControlType(control).encode());
     }
 
     /// Sets the device's control type and waits until a frame reports it
@@ -396,6 +454,9 @@ pub struct DeviceRecord {
     pub truth: Vec<ShoulderAngles>,
     /// The control type the device ran per streamed frame.
     pub control: Vec<ControlType>,
+    /// Every control type the host set, in order (those after the last
+    /// streamed frame too: a session's end).
+    pub set_controls: Vec<ControlType>,
     /// Frames streamed.
     pub frames: usize,
 }
@@ -491,6 +552,7 @@ struct Inputs {
     target: [f32; 3],
     packet: u16,
     last_heartbeat: Instant,
+    set_controls: Vec<ControlType>,
 }
 
 impl Inputs {
@@ -500,7 +562,10 @@ impl Inputs {
             Command::StartStream => self.streaming = true,
             Command::StopStream => self.streaming = false,
             Command::Heartbeat => self.last_heartbeat = Instant::now(),
-            Command::SetControlType(kind) => self.control = kind,
+            Command::SetControlType(kind) => {
+                self.control = kind;
+                self.set_controls.push(kind);
+            }
             Command::SetControlTarget(torques) => {
                 self.target = torques;
                 return true;
@@ -611,6 +676,7 @@ pub fn spawn_device_holding(
         let mut record = DeviceRecord {
             truth: Vec::new(),
             control: Vec::new(),
+            set_controls: Vec::new(),
             frames: 0,
         };
         let mut inputs = Inputs {
@@ -619,6 +685,7 @@ pub fn spawn_device_holding(
             target: [0f32; 3],
             packet: 0,
             last_heartbeat: Instant::now(),
+            set_controls: Vec::new(),
         };
         let mut awaiting_target = false;
         let mut counts = [0i32; 5];
@@ -753,6 +820,77 @@ pub fn spawn_device_holding(
                 }
             }
         }
+        // What the host still sent (its session's end) until it closed,
+        // for at most 0.5 s.
+        let deadline = Instant::now() + Duration::from_millis(500);
+        while let Some(left) = deadline.checked_duration_since(Instant::now()) {
+            match received.recv_timeout(left) {
+                Ok(command) => {
+                    inputs.apply(command);
+                }
+                Err(_) => break,
+            }
+        }
+        record.set_controls = inputs.set_controls;
         record
     }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use limb_kernel::monitor::Limit;
+
+    /// REQ-STOP-001: the host's own stops on AREBO, each cause its
+    /// category and control type: gravity compensation (the device's own
+    /// fallback) for every cause but a device whose state the host does
+    /// not know, which is switched off; changing one fails here.
+    #[test]
+    fn req_stop_001_each_host_stop_has_its_category_and_control_type() {
+        use ControlType::{GravityCompensation, Off};
+        use StopCategory::{Hold, MotorsOff, RampDown};
+        let verdict = |limit| {
+            StopCause::Violation(AreboViolation {
+                limit,
+                value: 1.0,
+                bound: 0.0,
+            })
+        };
+        let table = [
+            (StopCause::PortLost, RampDown, GravityCompensation),
+            (
+                verdict(AreboLimit::Kernel(Limit::StaleSensor)),
+                RampDown,
+                GravityCompensation,
+            ),
+            (
+                verdict(AreboLimit::Kernel(Limit::ForceMagnitude)),
+                RampDown,
+                GravityCompensation,
+            ),
+            (
+                verdict(AreboLimit::Kernel(Limit::Speed)),
+                Hold,
+                GravityCompensation,
+            ),
+            (verdict(AreboLimit::Flexion), Hold, GravityCompensation),
+            (verdict(AreboLimit::Abduction), Hold, GravityCompensation),
+            (
+                verdict(AreboLimit::DeviceHeartbeatMissing),
+                RampDown,
+                GravityCompensation,
+            ),
+            (
+                verdict(AreboLimit::TorqueSensorFault),
+                RampDown,
+                GravityCompensation,
+            ),
+            (verdict(AreboLimit::UnknownDeviceError), MotorsOff, Off),
+            (verdict(AreboLimit::ControlType), MotorsOff, Off),
+        ];
+        for (cause, category, control) in table {
+            assert_eq!(cause.category(), category, "{cause}");
+            assert_eq!(stop_control(cause.category()), control, "{cause}");
+        }
+    }
 }

@@ -229,16 +229,14 @@ impl AreboRobot {
             .send(DeviceCommand::SetControlType(ControlType::Off));
     }
 
-    /// The end of a session: the device to its own fallback, gravity
-    /// compensation (it carries its own weight; the arm rests on its
-    /// support), or motors off after a motors-off stop.
+    /// The end of a session: motors off after a motors-off stop, else the
+    /// link's end ([`Session::finish`]: gravity compensation, or the
+    /// category of the link's own stop).
     pub fn finish(&mut self) {
         if self.record.motors_off {
             self.switch_off();
         } else {
-            let _ = self.session.send(DeviceCommand::SetControlType(
-                ControlType::GravityCompensation,
-            ));
+            self.session.finish();
         }
     }
 

@@ -7,6 +7,7 @@
 use limb_arebo::control::GravityParameters;
 use limb_arebo::human::ShoulderAngles;
 use limb_arebo::link::{self, DeviceFault, FaultSwitch, Session};
+use limb_arebo::protocol::ControlType;
 use limb_arebo::robot::{on_simulated_held_arm, AreboRobot, AreboStop};
 use limb_arebo::safety::{AreboLimit, SafetyLimits};
 use limb_arebo::sim::{Setup, SAMPLE_PERIOD};
@@ -89,12 +90,19 @@ fn kernel() -> Box<Kernel> {
     Box::new(Kernel::new(config).unwrap())
 }
 
-/// Runs a session that does `action` at step [`ACT_AT`]: its outcome (or
-/// stop), the kernel time of the action, the events.
+/// Runs a session that does `action` at step [`ACT_AT`] and ends it as
+/// `limb arebo run` does ([`AreboRobot::finish`]): its outcome (or stop),
+/// the kernel time of the action, the events, and the control types the
+/// host set on the device, in order.
 fn session(
     faults: FaultSwitch,
     action: impl FnMut(),
-) -> (Result<Outcome, AreboStop>, Option<f64>, Vec<TraceEvent>) {
+) -> (
+    Result<Outcome, AreboStop>,
+    Option<f64>,
+    Vec<TraceEvent>,
+    Vec<ControlType>,
+) {
     let (device, mut robot) = robot(faults);
     let mut kernel = kernel();
     let mut bystander = Bystander {
@@ -104,10 +112,13 @@ fn session(
     };
     let mut events = Events::default();
     let outcome = limb_session::run(&mut kernel, &mut robot, &mut bystander, &mut events);
-    robot.switch_off();
+    robot.finish();
+    // The device reads the session's end before the port closes (a pty
+    // drops what its master has not read when the slave hangs up).
+    std::thread::sleep(Duration::from_millis(100));
     drop(robot);
-    let _ = device.join();
-    (outcome, bystander.acted_at, events.0)
+    let control = device.join().map(|d| d.set_controls).unwrap_or_default();
+    (outcome, bystander.acted_at, events.0, control)
 }
 
 /// The kernel stopped on `cause` after `acted_at`, and not before.
@@ -129,8 +140,13 @@ fn stopped_after(events: &[TraceEvent], acted_at: Option<f64>, cause: &str) {
 fn a_device_error_bit_stops_the_session_by_name() {
     let faults = FaultSwitch::default();
     let switch = faults.clone();
-    let (outcome, acted_at, _) = session(faults, move || switch.set(DeviceFault::HeartbeatLost));
+    let (outcome, acted_at, _, control) =
+        session(faults, move || switch.set(DeviceFault::HeartbeatLost));
     assert!(acted_at.is_some());
+    // REQ-STOP-001: the device's heartbeat fault is a ramp-down: AREBO is
+    // left in its gravity compensation, never switched off.
+    assert_eq!(control.last(), Some(&ControlType::GravityCompensation), "{control:?}");
+    assert!(!control.contains(&ControlType::Off), "{control:?}");
     let stop = outcome.expect_err("the device error ends the session");
     let violation = stop.violation().expect("a named verdict");
     assert_eq!(
@@ -147,10 +163,15 @@ fn a_device_error_bit_stops_the_session_by_name() {
 fn a_frozen_device_clock_is_a_stale_sensor_for_the_kernel() {
     let faults = FaultSwitch::default();
     let switch = faults.clone();
-    let (outcome, acted_at, events) = session(faults, move || switch.set(DeviceFault::FrozenClock));
+    let (outcome, acted_at, events, control) =
+        session(faults, move || switch.set(DeviceFault::FrozenClock));
     let outcome = outcome.unwrap();
     assert_eq!(outcome.final_state, StateKind::SafeStop);
     stopped_after(&events, acted_at, "stale_sensor");
+    // REQ-STOP-001: a stale sensor is a ramp-down: torque mode while the
+    // kernel ramps its wrench down, then gravity compensation, never off.
+    assert_eq!(control.last(), Some(&ControlType::GravityCompensation), "{control:?}");
+    assert!(!control.contains(&ControlType::Off), "{control:?}");
 }
 
 /// REQ-ADP-002: The host stalls 0.3 s (the device keeps streaming into the pty): the
@@ -158,7 +179,7 @@ fn a_frozen_device_clock_is_a_stale_sensor_for_the_kernel() {
 /// kernel's watchdog stops on a stale sensor.
 #[test]
 fn a_backlog_after_a_host_stall_is_a_stale_sensor_for_the_kernel() {
-    let (outcome, acted_at, events) = session(FaultSwitch::default(), || {
+    let (outcome, acted_at, events, _) = session(FaultSwitch::default(), || {
         std::thread::sleep(Duration::from_millis(300));
     });
     let outcome = outcome.unwrap();
@@ -268,6 +289,8 @@ fn req_stop_001_a_hold_stop_keeps_arebo_carrying_the_arm() {
     let outcome = limb_session::run(&mut kernel, &mut robot, &mut supervisor, &mut events);
     let record = robot.record();
     robot.finish();
+    // The device reads the session's end before the port closes.
+    std::thread::sleep(Duration::from_millis(100));
     drop(robot);
     let device = device.join().unwrap();
     assert!(outcome.is_ok(), "{outcome:?}");
@@ -292,9 +315,8 @@ fn req_stop_001_a_hold_stop_keeps_arebo_carrying_the_arm() {
             .all(|c| *c == limb_arebo::protocol::ControlType::Torque),
         "{seen:?}"
     );
-    assert!(!device
-        .control
-        .contains(&limb_arebo::protocol::ControlType::Off));
+    use limb_arebo::protocol::ControlType::{GravityCompensation, Torque};
+    assert_eq!(device.set_controls, [Torque, GravityCompensation]);
 }
 
 /// REQ-STOP-001: a motors-off stop command is the only one that switches
@@ -347,14 +369,15 @@ fn req_stop_001_motors_off_switches_arebo_off() {
     robot.finish();
     drop(robot);
     let device = device.join().unwrap();
+    // Torque mode from the start, motors off at the stop command, and
+    // nothing set after it (the end of the session keeps it off).
+    use limb_arebo::protocol::ControlType::{Off, Torque};
+    assert_eq!(device.set_controls.first(), Some(&Torque), "{device:?}");
+    assert_eq!(device.set_controls.last(), Some(&Off), "{:?}", device.set_controls);
+    let first_off = device.control.iter().skip_while(|c| **c == Off).position(|c| *c == Off);
     assert!(
-        device.control.contains(&limb_arebo::protocol::ControlType::Off),
-        "the device never ran motors off"
+        first_off.is_some_and(|at| at >= 99),
+        "motors off before the stop: {:?}",
+        device.control
     );
-    let first_off = device
-        .control
-        .iter()
-        .position(|c| *c == limb_arebo::protocol::ControlType::Off)
-        .unwrap();
-    assert!(first_off >= 99, "motors off before the stop: {first_off}");
 }

@@ -174,14 +174,17 @@ fn wrong_crc_is_rejected_as_a_lost_datagram() {
 /// REQ-ADP-001, wrench overlay: a loss burst trips the watchdog the same way; the
 /// overlay re-enters (wrench mode has no joint target to jump: the first
 /// replies carry the IPO/measured position and a zero wrench).
+/// REQ-STOP-001: a stale sensor is a ramp-down: every stop command carries
+/// that category and the wrench has fallen to zero 1 s after the stop.
 #[test]
 fn wrench_overlay_loss_burst_trips_the_watchdog_then_reenters() {
-    let run = run_with_overlay(FriVersion::V2_7, Overlay::Wrench, "burst-loss@600:50", 1200);
+    let run = run_with_overlay(FriVersion::V2_7, Overlay::Wrench, "burst-loss@600:50", 1900);
     assert!(stopped_because(&run, "stale_sensor"));
     assert_eq!(kernel_state(&run), StateKind::SafeStop);
     assert_eq!(run.sim.stats().commanding_entries, 2);
     assert_eq!(run.sim.state(), SessionState::CommandingActive);
     let command = run.last_command.unwrap();
+    assert_eq!(command.stop, Some(limb_kernel::StopCategory::RampDown));
     assert_eq!(command.wrench, limb_kernel::geometry::Wrench::ZERO);
     eprintln!("grasp after the stop: {:?}", run.sim.plant().truth());
 }

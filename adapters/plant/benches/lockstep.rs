@@ -29,6 +29,7 @@ fn hold() -> Command {
         set_point: Some(SetPoint::hold(Pose::new(0.0, 0.0, 0.0))),
         wrench: Wrench::new(0.0, 0.0, 0.0),
         saturation: Saturation::default(),
+        stop: None,
     }
 }
 

@@ -507,6 +507,7 @@ mod tests {
             }),
             wrench: Wrench::new(wrench[0], wrench[1], wrench[2]),
             saturation: Saturation::default(),
+            stop: None,
         }
     }
 

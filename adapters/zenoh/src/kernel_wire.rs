@@ -488,7 +488,7 @@ pub enum Mode {
     Track,
     /// Zero motion.
     Hold,
-    /// Latched stop: zero motion and zero wrench.
+    /// Latched stop: the set-point and wrench of its category (`stop`).
     Stop,
 }
 

@@ -18,7 +18,7 @@
 use super::{counted_log, first_stop, Budget, Ledger, LogRows, MemoryWatch, Soak};
 use crate::error::CliError;
 use limb_kernel::trace::{Event, TraceEvent};
-use limb_kernel::{KernelConfig, StateKind};
+use limb_kernel::{KernelConfig, StateKind, StopCategory};
 use limb_kuka::faults::{FaultKind, FaultSchedule, ScheduledFault};
 use limb_kuka::loopback::run_loopback_observed;
 use limb_kuka::messages::SessionState;
@@ -54,11 +54,13 @@ const LOAD_WINDOW: u64 = limb_kuka::sim_controller::QUALITY_WINDOW as u64;
 enum Expect {
     /// The session goes on (no stop during the window and its aftermath).
     RideThrough,
-    /// SafeStop with this cause, whatever the kernel was doing.
-    Stop(&'static str),
-    /// SafeStop by `request stop` (the robot stopped following) when the
-    /// kernel was moving the arm at injection; otherwise either that or
-    /// riding through.
+    /// SafeStop with this cause and stop category (kernel/src/stop.rs's
+    /// table, written here again so that a changed category fails the
+    /// soak), whatever the kernel was doing.
+    Stop(&'static str, StopCategory),
+    /// SafeStop by `request stop` (the robot stopped following; a hold)
+    /// when the kernel was moving the arm at injection; otherwise either
+    /// that or riding through.
     StopWhileMoving,
 }
 
@@ -67,7 +69,7 @@ impl Expect {
     fn name(self) -> String {
         match self {
             Expect::RideThrough => "ride_through".into(),
-            Expect::Stop(cause) => format!("stop: {cause}"),
+            Expect::Stop(cause, category) => format!("stop: {cause} ({})", category.name()),
             Expect::StopWhileMoving => "stop_while_moving".into(),
         }
     }
@@ -80,7 +82,7 @@ struct Case {
     expect: Expect,
 }
 
-const STALE: Expect = Expect::Stop("stale_sensor");
+const STALE: Expect = Expect::Stop("stale_sensor", StopCategory::RampDown);
 const UNFOLLOWED: Expect = Expect::StopWhileMoving;
 
 /// The faults, with the windows of the limb-kuka README's fault table.
@@ -98,7 +100,7 @@ const CASES: [Case; 13] = [
     case(
         FaultKind::ClockBack(5),
         1000,
-        Expect::Stop("sensor_time_reversed"),
+        Expect::Stop("sensor_time_reversed", StopCategory::RampDown),
     ),
     case(FaultKind::ClockStall, 1000, STALE),
     case(FaultKind::ClockRepeat, 1000, STALE),
@@ -147,6 +149,8 @@ struct Session {
     /// Controller cycle when the session was seen to end.
     ended_at: Option<u64>,
     stop: Option<String>,
+    /// The category of that stop.
+    category: Option<StopCategory>,
     completed: bool,
     record: Value,
     rows: LogRows,
@@ -243,9 +247,12 @@ impl Session {
         }
         let ok = match expect {
             Expect::RideThrough => !stopped_in_window,
-            Expect::Stop(name) => self.stop.as_deref() == Some(name),
+            Expect::Stop(name, category) => {
+                self.stop.as_deref() == Some(name) && self.category == Some(category)
+            }
             Expect::StopWhileMoving => {
-                let asked = self.stop.as_deref() == Some("request stop");
+                let asked = self.stop.as_deref() == Some("request stop")
+                    && self.category == Some(StopCategory::Hold);
                 asked || (!moving && !stopped_in_window)
             }
         };
@@ -264,6 +271,7 @@ impl Session {
             "state_at_fault": self.state_at_fault.map(|s| s.title()),
             "ended_at_cycle": self.ended_at,
             "stop": self.stop,
+            "category": self.category.map(StopCategory::name),
             "completed": self.completed,
             "verdict": self.verdict().map(Verdict::name),
             "log_rows": self.rows.frames,
@@ -340,12 +348,14 @@ fn session(
     let idle = stats.state_cycles[SessionState::Idle as usize];
     let answered = stats.replies_on_time + stats.missed_cycles + idle;
     let unaccounted_cycles = stats.cycles as i64 - answered as i64;
+    let stop = first_stop(&run.events);
     Ok(Session {
         fault,
         expect: case.map(|c| c.expect),
         state_at_fault,
         ended_at,
-        stop: first_stop(&run.events),
+        stop: stop.as_ref().map(|(name, _)| name.clone()),
+        category: stop.and_then(|(_, category)| category),
         completed: run.outcome.completed,
         record: json!({
             "cycles": stats.cycles,
@@ -546,6 +556,7 @@ mod tests {
             state_at_fault: None,
             ended_at: Some(5_000),
             stop: Some(stop.into()),
+            category: Some(StopCategory::Hold),
             completed: false,
             record: json!({ "cycles": 5_000 }),
             rows: LogRows {

@@ -8,15 +8,18 @@
 //! estimation the kernel must refuse, stops (signed) and resets. A seeded
 //! draw puts an emergency stop at a random time of the session (or none);
 //! it must be acknowledged and end in SafeStop with origin
-//! `emergency_stop`, after which the supervisor resets and the session
-//! ends. Every command is answered (accepted or refused) or counted as
+//! `emergency_stop`. After either stop the supervisor resets at once and
+//! every 20 ms while the kernel refuses (`arm_not_still`), then resumes
+//! with an estimation at once: a stop within the next second is a trip
+//! caused by the resume, and a loss; so is a SafeStop sample whose command
+//! does not carry the stop category `hold` (REQ-STOP-001, REQ-STOP-003). Every command is answered (accepted or refused) or counted as
 //! missed; every sample the node published is received or counted as lost;
 //! every kernel step has its step-log row and every frame its session-log
 //! row.
 
 use super::{counted_log, Budget, CountedLog, Ledger, LogRows, MemoryWatch, Soak};
 use crate::error::CliError;
-use limb_kernel::{Kernel, KernelConfig, StateKind};
+use limb_kernel::{Kernel, KernelConfig, StateKind, StopCategory};
 use limb_sim::noise::Gaussian;
 use limb_sim::robot::ReferenceRobot;
 use limb_sim::{Plant, PlantParameters};
@@ -58,6 +61,12 @@ const SESSION_SECONDS: f64 = 36.0;
 const SETTLE: Duration = Duration::from_millis(100);
 /// How long the manipulation runs before the supervisor finishes it.
 const MANIPULATION: Duration = Duration::from_secs(4);
+/// Pause between resets the kernel refused (the arm not yet still).
+const RESET_RETRY: Duration = Duration::from_millis(20);
+/// How long the supervisor retries a reset after a stop.
+const RESET_PATIENCE: Duration = Duration::from_secs(5);
+/// How long a resumed estimation is watched for a stop it caused.
+const RESUME_WATCH: Duration = Duration::from_secs(1);
 /// The manipulation target [rad].
 const TARGET: Joints = Joints {
     shoulder_elevation: 1.0,
@@ -75,6 +84,9 @@ struct Received {
     first_armed: Option<u64>,
     events: Vec<EventMessage>,
     status: Option<KernelStatus>,
+    /// Samples in SafeStop by the stop category their command carried
+    /// (`none` for none: a defect).
+    stop_samples: BTreeMap<String, u64>,
 }
 
 /// The received telemetry, shared with the callbacks.
@@ -126,6 +138,18 @@ struct Counts {
     estops: u64,
     estop_acks: u64,
     estop_missed: u64,
+    /// Resets refused (`arm_not_still`: the stop still moving or the arm
+    /// not yet still) before one was accepted.
+    resets_refused: u64,
+    /// Longest time from the first reset after a stop to the accepted one.
+    longest_reset_wait: Duration,
+    /// Estimations started at once after an accepted reset.
+    resumes: u64,
+    /// Resumes the kernel stopped within [`RESUME_WATCH`] (a monitor
+    /// tripped by the resume).
+    resume_trips: u64,
+    /// Stops after which no reset was accepted within [`RESET_PATIENCE`].
+    never_reset: u64,
 }
 
 /// The supervisor's script, the emergency stop at `estop_at` after
@@ -142,16 +166,54 @@ struct Script<'a> {
 }
 
 impl Script<'_> {
-    /// Sends `command`; counts its ack or its absence.
-    fn command(&mut self, command: SupervisorCommand) -> Result<(), CliError> {
+    /// Sends `command`; counts its ack or its absence. True when accepted.
+    fn command(&mut self, command: SupervisorCommand) -> Result<bool, CliError> {
         self.counts.commands += 1;
         match self.supervisor.request(command, ANSWER) {
             Ok(ack) => match ack.outcome {
-                AckOutcome::Accepted { .. } => self.counts.accepted += 1,
+                AckOutcome::Accepted { .. } => {
+                    self.counts.accepted += 1;
+                    return Ok(true);
+                }
                 AckOutcome::Refused { .. } => self.counts.refused += 1,
             },
             Err(AdapterError::Timeout(_)) => self.counts.missed += 1,
             Err(error) => return Err(internal(&error)),
+        }
+        Ok(false)
+    }
+
+    /// Right after a stop (the first reset within the ack's round trip,
+    /// well under 50 ms), resets every [`RESET_RETRY`] until the kernel
+    /// accepts (it refuses `arm_not_still` while the stop's set-point moves
+    /// or the arm is not still), then resumes at once with an estimation
+    /// and watches it for [`RESUME_WATCH`]: a stop then is a trip caused by
+    /// the resume (REQ-STOP-003).
+    fn reset_and_resume(&mut self) -> Result<(), CliError> {
+        let first = Instant::now();
+        loop {
+            if self.command(SupervisorCommand::Reset)? {
+                break;
+            }
+            if first.elapsed() >= RESET_PATIENCE || self.budget.spent() {
+                self.counts.never_reset += 1;
+                return Ok(());
+            }
+            self.counts.resets_refused += 1;
+            std::thread::sleep(RESET_RETRY);
+        }
+        self.counts.longest_reset_wait = self.counts.longest_reset_wait.max(first.elapsed());
+        let grasp = |s| s == StateKind::Grasp;
+        if !self.wait(grasp, ANSWER)? || !self.command(SupervisorCommand::StartEstimation)? {
+            return Ok(());
+        }
+        self.counts.resumes += 1;
+        // An emergency stop falling due meanwhile is not the resume's.
+        let stopped = |s| s == StateKind::SafeStop;
+        if self.wait(stopped, RESUME_WATCH)?
+            && self.node.view().state() == Some(StateKind::SafeStop)
+        {
+            self.counts.resume_trips += 1;
         }
         Ok(())
     }
@@ -229,7 +291,7 @@ impl Script<'_> {
             return Ok(false);
         }
         self.command(SupervisorCommand::Stop)?;
-        self.command(SupervisorCommand::Reset)?;
+        self.reset_and_resume()?;
         Ok(true)
     }
 }
@@ -243,6 +305,8 @@ struct Session {
     stops: BTreeMap<String, u64>,
     /// Each of them, its kernel time and the state it stopped.
     stop_times: Vec<String>,
+    /// SafeStop samples by their stop category.
+    stop_samples: BTreeMap<String, u64>,
     steps: u64,
     rows: LogRows,
     stale_steps: u64,
@@ -354,6 +418,10 @@ fn session(
         &tally,
         |r, s: SampleMessage| {
             r.steps.insert(s.step);
+            if s.command.state == State::SafeStop {
+                let category = s.command.stop.map_or("none", StopCategory::name);
+                *r.stop_samples.entry(category.into()).or_default() += 1;
+            }
             if r.armed && r.first_armed.is_none() {
                 r.first_armed = Some(s.step);
             }
@@ -401,7 +469,7 @@ fn session(
         // The stop must show as its event before the reset.
         let stopped = |s| s == StateKind::SafeStop;
         script.wait(stopped, ANSWER)?;
-        script.command(SupervisorCommand::Reset)?;
+        script.reset_and_resume()?;
     }
     let counts = std::mem::take(&mut script.counts);
     // Telemetry of the last steps on its way.
@@ -437,6 +505,7 @@ fn session(
         counts,
         stops,
         stop_times,
+        stop_samples: received.stop_samples,
         steps: outcome.steps,
         rows: LogRows::of(log)?,
         stale_steps: outcome.stale_steps,
@@ -464,6 +533,12 @@ impl Session {
             "estop_acks": self.counts.estop_acks,
             "estop_missed": self.counts.estop_missed,
             "safe_stops": self.stop_times,
+            "stop_samples_by_category": self.stop_samples,
+            "resets_refused": self.counts.resets_refused,
+            "longest_reset_wait_s": self.counts.longest_reset_wait.as_secs_f64(),
+            "resumes": self.counts.resumes,
+            "resume_trips": self.counts.resume_trips,
+            "never_reset": self.counts.never_reset,
             "kernel_steps": self.steps,
             "log_rows": self.rows.frames,
             "step_log_rows": self.rows.steps,
@@ -511,6 +586,9 @@ struct Judge {
     ledger: Ledger,
     stops: BTreeMap<String, u64>,
     scripts_completed: u64,
+    resumes: u64,
+    resets_refused: u64,
+    longest_reset_wait: Duration,
 }
 
 impl Judge {
@@ -542,6 +620,21 @@ impl Judge {
                 s.counts.estops
             ));
         }
+        // Every stop of this soak (emergency stops, signed stops) is a
+        // hold, on every SafeStop sample (REQ-STOP-001).
+        if let Some((category, count)) = s.stop_samples.iter().find(|(c, _)| c.as_str() != "hold") {
+            self.ledger.lose(format!(
+                "session {index}: {count} SafeStop samples with stop category {category}, expected hold"
+            ));
+        }
+        if s.counts.resume_trips + s.counts.never_reset > 0 {
+            self.ledger.lose(format!(
+                "session {index}: {} resumes stopped within {} s, {} stops never reset",
+                s.counts.resume_trips,
+                RESUME_WATCH.as_secs_f64(),
+                s.counts.never_reset
+            ));
+        }
         if s.received != s.published {
             self.ledger.lose(format!(
                 "session {index}: {} samples received of {} published",
@@ -549,6 +642,9 @@ impl Judge {
             ));
         }
         self.scripts_completed += u64::from(s.completed);
+        self.resumes += s.counts.resumes;
+        self.resets_refused += s.counts.resets_refused;
+        self.longest_reset_wait = self.longest_reset_wait.max(s.counts.longest_reset_wait);
         self.ledger.add(s.json());
     }
 
@@ -556,6 +652,9 @@ impl Judge {
         let figures = json!({
             "scripts_completed": self.scripts_completed,
             "safe_stops": self.stops,
+            "resumes_after_reset": self.resumes,
+            "resets_refused_arm_not_still": self.resets_refused,
+            "longest_reset_wait_s": self.longest_reset_wait.as_secs_f64(),
         });
         self.ledger.finish("zenoh", figures, memory)
     }

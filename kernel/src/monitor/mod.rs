@@ -66,27 +66,6 @@ impl Limit {
     pub fn code(self) -> u16 {
         self as u16
     }
-
-    /// Stable snake_case name.
-    pub const fn name(self) -> &'static str {
-        match self {
-            Limit::NonFiniteSensor => "non_finite_sensor",
-            Limit::ClockFault => "clock_fault",
-            Limit::SensorTimeReversed => "sensor_time_reversed",
-            Limit::StaleSensor => "stale_sensor",
-            Limit::ForceMagnitude => "force_magnitude",
-            Limit::Torque => "torque",
-            Limit::ForceRate => "force_rate",
-            Limit::Speed => "speed",
-            Limit::GraspBelowTable => "grasp_below_table",
-            Limit::ElbowBelowTable => "elbow_below_table",
-            Limit::WorkspaceX => "workspace_x",
-            Limit::WorkspaceZ => "workspace_z",
-            Limit::ShoulderElevation => "shoulder_elevation",
-            Limit::ElbowFlexion => "elbow_flexion",
-            Limit::ModelMismatch => "model_mismatch",
-        }
-    }
 }
 
 /// A limit crossed, with the measured value and the bound it crossed.
