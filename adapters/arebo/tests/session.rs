@@ -145,7 +145,11 @@ fn a_device_error_bit_stops_the_session_by_name() {
     assert!(acted_at.is_some());
     // REQ-STOP-001: the device's heartbeat fault is a ramp-down: AREBO is
     // left in its gravity compensation, never switched off.
-    assert_eq!(control.last(), Some(&ControlType::GravityCompensation), "{control:?}");
+    assert_eq!(
+        control.last(),
+        Some(&ControlType::GravityCompensation),
+        "{control:?}"
+    );
     assert!(!control.contains(&ControlType::Off), "{control:?}");
     let stop = outcome.expect_err("the device error ends the session");
     let violation = stop.violation().expect("a named verdict");
@@ -170,7 +174,11 @@ fn a_frozen_device_clock_is_a_stale_sensor_for_the_kernel() {
     stopped_after(&events, acted_at, "stale_sensor");
     // REQ-STOP-001: a stale sensor is a ramp-down: torque mode while the
     // kernel ramps its wrench down, then gravity compensation, never off.
-    assert_eq!(control.last(), Some(&ControlType::GravityCompensation), "{control:?}");
+    assert_eq!(
+        control.last(),
+        Some(&ControlType::GravityCompensation),
+        "{control:?}"
+    );
     assert!(!control.contains(&ControlType::Off), "{control:?}");
 }
 
@@ -373,8 +381,17 @@ fn req_stop_001_motors_off_switches_arebo_off() {
     // nothing set after it (the end of the session keeps it off).
     use limb_arebo::protocol::ControlType::{Off, Torque};
     assert_eq!(device.set_controls.first(), Some(&Torque), "{device:?}");
-    assert_eq!(device.set_controls.last(), Some(&Off), "{:?}", device.set_controls);
-    let first_off = device.control.iter().skip_while(|c| **c == Off).position(|c| *c == Off);
+    assert_eq!(
+        device.set_controls.last(),
+        Some(&Off),
+        "{:?}",
+        device.set_controls
+    );
+    let first_off = device
+        .control
+        .iter()
+        .skip_while(|c| **c == Off)
+        .position(|c| *c == Off);
     assert!(
         first_off.is_some_and(|at| at >= 99),
         "motors off before the stop: {:?}",

@@ -57,6 +57,9 @@ fn reset_when_still(supervisor: &mut limb_zenoh::supervisor::Supervisor) -> (Ack
     }
 }
 
+/// Every command goes through the kernel's guards and is acknowledged; a
+/// reset right after a stop is refused as `arm_not_still` until the stop's
+/// hold has settled, then accepted (REQ-SM-006, REQ-STOP-003).
 #[test]
 fn commands_go_through_the_kernel_guards_and_are_acknowledged() {
     let mut rig = rig(RigOptions::default());

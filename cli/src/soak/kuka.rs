@@ -475,7 +475,10 @@ impl Judge {
         let entry = self.by_fault.entry(name.clone()).or_default();
         *entry.entry("sessions".into()).or_default() += 1;
         let outcome = match (&s.stop, s.completed) {
-            (Some(stop), _) => stop.clone(),
+            (Some(stop), _) => match s.category {
+                Some(category) => format!("{stop} ({})", category.name()),
+                None => stop.clone(),
+            },
             (None, true) => "completed".into(),
             (None, false) => "cut (session length or soak's end)".into(),
         };
