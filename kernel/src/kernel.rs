@@ -35,7 +35,7 @@ use crate::config::{ConfigError, KernelConfig, SafetyLimits};
 use crate::estimation::ArmEstimate;
 use crate::geometry::{Pose, Wrench};
 use crate::impedance::{ImpedanceLaw, Saturation};
-use crate::lift::LiftPhase;
+use crate::lift::{holding_pose, LiftPhase};
 use crate::monitor::force::ForceMonitor;
 use crate::monitor::joint_limits::JointLimitMonitor;
 use crate::monitor::rates::RateWindow;
@@ -652,17 +652,6 @@ fn stop_state(state: State, reason: StopReason, start: StopStart) -> crate::stat
         State::Manipulate(s) => s.stop(reason, start),
         State::SafeStop(s) => s,
     }
-}
-
-/// The set-point that holds the arm where `frame` measured it with the
-/// wrench it measured: x − f_ext/K (as the lift's hold, [`crate::lift`]).
-fn holding_pose(frame: &PathSample, stiffness: &[f64; 3]) -> Pose {
-    let w = frame.wrench;
-    Pose::new(
-        frame.pose.x - w.fx / stiffness[0],
-        frame.pose.z - w.fz / stiffness[1],
-        frame.pose.psi - w.ty / stiffness[2],
-    )
 }
 
 #[cfg(any(test, kani))]

@@ -372,8 +372,9 @@ impl ShapedLift {
 /// measured pose moved by the wrench the robot applies now over the
 /// stiffness, x_d = x + F/K = x − f_ext/K, so the spring keeps carrying the
 /// arm's weight. The lift's own set-point leads the arm by up to 0.15 m;
-/// frozen there it would pull the arm on past its limits.
-fn holding_pose(frame: &PathSample, stiffness: &[f64; 3]) -> Pose {
+/// frozen there it would pull the arm on past its limits. A stop's hold
+/// uses it too ([`crate::stop`]).
+pub(crate) fn holding_pose(frame: &PathSample, stiffness: &[f64; 3]) -> Pose {
     let w = frame.wrench;
     Pose::new(
         frame.pose.x - w.fx / stiffness[0],
