@@ -8,6 +8,7 @@
 use crate::error::{emit, print_json, CliError};
 use indicatif::{ProgressBar, ProgressStyle};
 use limb_diagnosis::plant::arm::blind::{self, Summary};
+use limb_diagnosis::plant::arm::curves::curves;
 use limb_diagnosis::plant::arm::{diagnose, Diagnosis, Lengths};
 use limb_diagnosis::report::{self, Subject};
 use limb_diagnosis::Progress;
@@ -110,6 +111,7 @@ pub fn run(args: &DiagnoseArgs) -> Result<(), CliError> {
                 source: &log.display().to_string(),
                 held_out: &diagnosed.diagnosis.held_out,
                 facts: &facts(&diagnosed.diagnosis),
+                curves: &curves(&diagnosed.diagnosis),
             },
         )?;
     }

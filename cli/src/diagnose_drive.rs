@@ -107,6 +107,7 @@ pub fn run(args: &DiagnoseDriveArgs) -> Result<(), CliError> {
                 source: &source,
                 held_out: &diagnosed.diagnosis.held_out_data,
                 facts: &[],
+                curves: &[],
             },
         )?;
     }

@@ -7,7 +7,9 @@
 //! residual of both over time with the localised window shaded; last the
 //! effects added in order and the ranking of every candidate. The page
 //! knows only [`Model`] and the engine's [`Selection`], so every plant
-//! (the arm, a drive) gets the same page.
+//! (the arm, a drive) gets the same page; a plant may add [`Curve`]s of
+//! its own (the arm: what a person's arm's fitted effects mean, a
+//! passive torque against the joint angle, …), drawn after the residuals.
 //!
 //! The SVG is written here rather than by a plotting crate: the page then
 //! needs no font files at build or run time and is byte-for-byte
@@ -58,10 +60,23 @@ fn tick_step(span: f64) -> f64 {
     nice * power
 }
 
-/// An SVG line chart of `lines` against `times`, `shade` [s] shaded.
+/// An SVG line chart of `lines` against time, `shade` [s] shaded.
 fn chart(
     title: &str,
     unit: &str,
+    times: &[f64],
+    lines: &[Line],
+    shade: Option<(f64, f64)>,
+) -> String {
+    chart_against(title, unit, "t [s]", times, lines, shade)
+}
+
+/// An SVG line chart of `lines` against `times` (the abscissa, labelled
+/// `abscissa`), `shade` shaded.
+fn chart_against(
+    title: &str,
+    unit: &str,
+    abscissa: &str,
     times: &[f64],
     lines: &[Line],
     shade: Option<(f64, f64)>,
@@ -136,9 +151,10 @@ fn chart(
     }
     let _ = write!(
         svg,
-        r#"<text x="{:.1}" y="{:.1}" text-anchor="end">t [s]</text><text x="12" y="{:.1}" transform="rotate(-90 12 {:.1})" text-anchor="middle">{}</text>"#,
+        r#"<text x="{:.1}" y="{:.1}" text-anchor="end">{}</text><text x="12" y="{:.1}" transform="rotate(-90 12 {:.1})" text-anchor="middle">{}</text>"#,
         WIDTH - right,
         HEIGHT - 4.0,
+        escape(abscissa),
         HEIGHT / 2.0,
         HEIGHT / 2.0,
         escape(unit)
@@ -191,6 +207,24 @@ fn place(location: &Location) -> String {
     text
 }
 
+/// A plant's own chart of a fitted effect: what its parameters mean, as
+/// a curve against a physical quantity (not time).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Curve {
+    /// Title, with the fitted parameters.
+    pub title: String,
+    /// What the curve means, in a sentence under the chart.
+    pub caption: String,
+    /// Abscissa label with its unit ("elbow angle q2 [rad]").
+    pub abscissa: String,
+    /// Ordinate unit.
+    pub unit: String,
+    /// Abscissa values.
+    pub xs: Vec<f64>,
+    /// (label, values at `xs`) of each line.
+    pub lines: Vec<(String, Vec<f64>)>,
+}
+
 /// What one report page shows: the plant's model of the scored (held-out)
 /// data and the engine's selection made on it.
 #[derive(Clone, Copy)]
@@ -207,6 +241,8 @@ pub struct Subject<'a> {
     /// text): the arm's corrected lengths beside the kernel's estimate
     /// and the unexplained part; empty for none.
     pub facts: &'a [(String, String)],
+    /// The plant's charts of its fitted effects (empty for none).
+    pub curves: &'a [Curve],
 }
 
 /// The report page of one diagnosis (any plant: the arm, a drive).
@@ -217,6 +253,7 @@ pub fn page(subject: &Subject) -> String {
         source,
         held_out,
         facts,
+        curves,
     } = *subject;
     let predictions = &selection.predictions;
     let empty = Series::with_capacity(model.signals().len(), 0);
@@ -346,6 +383,31 @@ pub fn page(subject: &Subject) -> String {
             ],
             shade,
         );
+    }
+    if !curves.is_empty() {
+        html += "<h2>What the fitted effects mean</h2>";
+    }
+    const COLOURS: [&str; 4] = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd"];
+    for curve in curves {
+        let lines: Vec<Line> = curve
+            .lines
+            .iter()
+            .zip(COLOURS.iter().cycle())
+            .map(|((label, values), colour)| Line {
+                label,
+                colour,
+                values: values.clone(),
+            })
+            .collect();
+        html += &chart_against(
+            &curve.title,
+            &curve.unit,
+            &curve.abscissa,
+            &curve.xs,
+            &lines,
+            None,
+        );
+        let _ = write!(html, "<p>{}</p>", escape(&curve.caption));
     }
     html += "<h2>Effects added, in order</h2><table><tr><th>effect</th>\
              <th>held-out gap after</th><th>fitted parameters (refitted with all added)</th></tr>";

@@ -30,6 +30,14 @@ pub struct ArmTerms {
 
 /// The terms for arm `a` at q, q̇.
 pub fn arm_terms(a: &ArmParameters, q: Vec2, qd: Vec2) -> ArmTerms {
+    arm_terms_with_rod(a, q, qd, a.forearm_length)
+}
+
+/// The terms for arm `a` at q, q̇ whose forearm rod (mass centre at half
+/// of it, inertia m2 rod² / 12) is `rod` long [m] while the grasp is at
+/// the forearm length (`effects::cuff_offset`); [`arm_terms`] is `rod` =
+/// the forearm length.
+pub fn arm_terms_with_rod(a: &ArmParameters, q: Vec2, qd: Vec2, rod: f64) -> ArmTerms {
     let (l1, l2, m1, m2, g) = (
         a.upper_arm_length,
         a.forearm_length,
@@ -37,8 +45,8 @@ pub fn arm_terms(a: &ArmParameters, q: Vec2, qd: Vec2) -> ArmTerms {
         a.forearm_mass,
         a.gravity,
     );
-    let (c1, c2) = (l1 / 2.0, l2 / 2.0);
-    let (i1, i2) = (m1 * l1 * l1 / 12.0, m2 * l2 * l2 / 12.0);
+    let (c1, c2) = (l1 / 2.0, rod / 2.0);
+    let (i1, i2) = (m1 * l1 * l1 / 12.0, m2 * rod * rod / 12.0);
     let psi = q[0] + q[1];
     let (s1, co1) = (libm::sin(q[0]), libm::cos(q[0]));
     let (sp, cp) = (libm::sin(psi), libm::cos(psi));

@@ -17,14 +17,18 @@
 //! [`Plant::with_effects`] adds the effects of [`crate::effects`]: friction
 //! and active torque change the generalised forces, mass mismatch and
 //! grasp slip the arm's parameters, shoulder drift moves the whole arm;
+//! a person's arm's own effects: passive stiffness and spasticity add
+//! joint torques, shoulder rhythm moves the shoulder with the elevation,
+//! cuff offset moves the grasp off the forearm's line and lengthens its
+//! rod;
 //! compliance, tilt, latency, backlash and quantization change what
 //! [`Plant::measure`] returns, in that order, noise being added before the
 //! quantization. Without effects no extra arithmetic is done, so the nominal
 //! plant is bit-identical.
 
 use crate::contact::{self, ActiveSet, CANDIDATES};
-use crate::dynamics::{apply, apply_transpose, arm_terms, Vec2};
-use crate::effects::Effects;
+use crate::dynamics::{apply, apply_transpose, arm_terms, arm_terms_with_rod, Vec2};
+use crate::effects::{Effects, Spasticity};
 use crate::noise::Gaussian;
 use crate::params::PlantParameters;
 use alloc::collections::VecDeque;
@@ -114,6 +118,9 @@ pub struct Plant {
     shoulder_velocity: Vec2,
     /// The grasp slip has happened.
     slipped: bool,
+    /// Elbow speeds q̇2 of the last steps, newest last (spasticity only:
+    /// the reflex sees the one its delay ago).
+    elbow_speeds: VecDeque<f64>,
     /// This instant's [`Plant::resolve`], once computed: a
     /// [`Plant::measure`] and the [`Plant::step`] after it share it (the
     /// state, set-point and time are the same), so an instant's dynamics
@@ -154,6 +161,7 @@ impl Plant {
             shoulder_offset: [0.0, 0.0],
             shoulder_velocity: [0.0, 0.0],
             slipped: false,
+            elbow_speeds: VecDeque::new(),
             resolved: None,
         })
     }
@@ -193,7 +201,37 @@ impl Plant {
         let a = &self.params.arm;
         let r = &self.params.robot;
         let d = self.damping;
-        let mut t = arm_terms(a, q, qd);
+        let mut t = match self.effects.cuff_offset {
+            Some(cuff) => arm_terms_with_rod(a, q, qd, a.forearm_length + cuff.along),
+            None => arm_terms(a, q, qd),
+        };
+        if let Some(cuff) = self.effects.cuff_offset {
+            // The grasp sits `across` off the forearm's line: it turns
+            // with psi (see `effects::cuff_offset`).
+            let psi = q[0] + q[1];
+            let psid = qd[0] + qd[1];
+            let (s, c) = (libm::sin(psi), libm::cos(psi));
+            let shift = cuff.displacement(psi);
+            t.pose[0] += shift[0];
+            t.pose[1] += shift[1];
+            for column in 0..2 {
+                t.jacobian[0][column] += cuff.across * c;
+                t.jacobian[1][column] -= cuff.across * s;
+            }
+            t.jacobian_rate[0] -= cuff.across * s * psid * psid;
+            t.jacobian_rate[1] -= cuff.across * c * psid * psid;
+        }
+        if let Some(rhythm) = self.effects.shoulder_rhythm {
+            // The shoulder translates with the elevation q1, the arm on
+            // it; its weight acts through the rise (see
+            // `effects::shoulder_rhythm`).
+            let shift = rhythm.displacement(q[0]);
+            t.pose[0] += shift[0];
+            t.pose[1] += shift[1];
+            t.jacobian[0][0] += rhythm.x;
+            t.jacobian[1][0] += rhythm.z;
+            t.gravity[0] += (a.upper_arm_mass + a.forearm_mass) * a.gravity * rhythm.z;
+        }
         let mut v = apply(&t.jacobian, qd);
         if self.effects.shoulder_drift.is_some() {
             // The whole arm rides on the shoulder: the grasp is displaced
@@ -236,6 +274,14 @@ impl Plant {
         if let Some(active) = self.effects.active_torque {
             rhs[1] += active.torque(self.time());
         }
+        if let Some(passive) = self.effects.passive_stiffness {
+            let tau = passive.torques(q);
+            rhs[0] += tau[0];
+            rhs[1] += tau[1];
+        }
+        if let Some(spasticity) = self.effects.spasticity {
+            rhs[1] += spasticity.torque(self.delayed_elbow_speed());
+        }
         let (qdd, lambda) = contact::solve(set, &mass, rhs)?;
         let acc = apply(&t.jacobian, qdd);
         let mut wrench = [0.0; 3];
@@ -251,6 +297,16 @@ impl Plant {
             pose: t.pose,
             wrench,
         })
+    }
+
+    /// The elbow speed the stretch reflex sees: q̇2 its delay ago (at
+    /// rest before the log reaches that far back).
+    fn delayed_elbow_speed(&self) -> f64 {
+        if self.elbow_speeds.len() >= Spasticity::steps(STEP) {
+            self.elbow_speeds.front().copied().unwrap_or(0.0)
+        } else {
+            0.0
+        }
     }
 
     /// Chooses the active set and returns the projected state with its
@@ -360,6 +416,12 @@ impl Plant {
             }
         }
         contact::clamp(&mut q, &mut qd);
+        if self.effects.spasticity.is_some() {
+            self.elbow_speeds.push_back(qd[1]);
+            while self.elbow_speeds.len() > Spasticity::steps(STEP) {
+                self.elbow_speeds.pop_front();
+            }
+        }
         self.q = q;
         self.qd = qd;
         self.steps += 1;
@@ -403,7 +465,18 @@ impl Plant {
     pub fn truth(&self) -> Truth {
         let a = &self.params.arm;
         let (l1, l2) = (a.upper_arm_length, a.forearm_length);
-        let shoulder = Point::new(l1 + l2 + self.shoulder_offset[0], self.shoulder_offset[1]);
+        let mut shoulder = [l1 + l2 + self.shoulder_offset[0], self.shoulder_offset[1]];
+        if let Some(rhythm) = self.effects.shoulder_rhythm {
+            let shift = rhythm.displacement(self.q[0]);
+            shoulder[0] += shift[0];
+            shoulder[1] += shift[1];
+        }
+        if let Some(cuff) = self.effects.cuff_offset {
+            // Frame S keeps its origin at the grasp at t = 0, `across`
+            // above the forearm's line.
+            shoulder[1] -= cuff.across;
+        }
+        let shoulder = Point::new(shoulder[0], shoulder[1]);
         let round = |v: f64| libm::round(v / POTENTIOMETER_RESOLUTION) * POTENTIOMETER_RESOLUTION;
         Truth {
             q: [round(self.q[0]), round(self.q[1])],

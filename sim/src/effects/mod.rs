@@ -16,7 +16,9 @@
 //! * measurement side (change what `measure()` returns): `backlash`,
 //!   `quantization`, `latency`, `grasp_compliance`, `plane_tilt`;
 //! * dynamics side (change the plant): `joint_friction`, `mass_mismatch`,
-//!   `shoulder_drift`, `active_torque`, `grasp_slip`.
+//!   `shoulder_drift`, `active_torque`, `grasp_slip`, and a person's arm's
+//!   own: `passive_stiffness`, `spasticity`, `shoulder_rhythm`,
+//!   `cuff_offset`.
 //!
 //! [`measurement`] applies the measurement side to a noise-free record
 //! without the plant, as a diagnosis predicts it.
@@ -29,26 +31,34 @@ use alloc::vec::Vec;
 
 pub mod active_torque;
 pub mod backlash;
+pub mod cuff_offset;
 pub mod grasp_compliance;
 pub mod grasp_slip;
 pub mod joint_friction;
 pub mod latency;
 pub mod mass_mismatch;
 pub mod measurement;
+pub mod passive_stiffness;
 pub mod plane_tilt;
 pub mod quantization;
 pub mod shoulder_drift;
+pub mod shoulder_rhythm;
+pub mod spasticity;
 
 pub use active_torque::ActiveTorque;
 pub use backlash::Backlash;
+pub use cuff_offset::CuffOffset;
 pub use grasp_compliance::GraspCompliance;
 pub use grasp_slip::GraspSlip;
 pub use joint_friction::JointFriction;
 pub use latency::Latency;
 pub use mass_mismatch::MassMismatch;
+pub use passive_stiffness::PassiveStiffness;
 pub use plane_tilt::PlaneTilt;
 pub use quantization::Quantization;
 pub use shoulder_drift::ShoulderDrift;
+pub use shoulder_rhythm::ShoulderRhythm;
+pub use spasticity::Spasticity;
 
 /// How a parameter's range is walked by a search: evenly, or evenly in
 /// its logarithm (for quantities spanning decades: stiffness, friction).
@@ -171,8 +181,9 @@ pub struct Descriptor {
     pub parameters: &'static [Parameter],
 }
 
-/// Every effect of `plant.md` (except `none`, the absence of effects).
-pub const CATALOGUE: [Descriptor; 10] = [
+/// Every effect of `plant.md` (except `none`, the absence of effects): the
+/// ten of a robot's gap, then the four of a person's arm (`spec/arm.md`).
+pub const CATALOGUE: [Descriptor; 14] = [
     Descriptor {
         name: "joint_friction",
         parameters: &joint_friction::PARAMETERS,
@@ -212,6 +223,22 @@ pub const CATALOGUE: [Descriptor; 10] = [
     Descriptor {
         name: "grasp_slip",
         parameters: &grasp_slip::PARAMETERS,
+    },
+    Descriptor {
+        name: "passive_stiffness",
+        parameters: &passive_stiffness::PARAMETERS,
+    },
+    Descriptor {
+        name: "spasticity",
+        parameters: &spasticity::PARAMETERS,
+    },
+    Descriptor {
+        name: "shoulder_rhythm",
+        parameters: &shoulder_rhythm::PARAMETERS,
+    },
+    Descriptor {
+        name: "cuff_offset",
+        parameters: &cuff_offset::PARAMETERS,
     },
 ];
 
@@ -303,6 +330,14 @@ pub enum Effect {
     ActiveTorque(ActiveTorque),
     /// See [`grasp_slip`].
     GraspSlip(GraspSlip),
+    /// See [`passive_stiffness`].
+    PassiveStiffness(PassiveStiffness),
+    /// See [`spasticity`].
+    Spasticity(Spasticity),
+    /// See [`shoulder_rhythm`].
+    ShoulderRhythm(ShoulderRhythm),
+    /// See [`cuff_offset`].
+    CuffOffset(CuffOffset),
 }
 
 impl Effect {
@@ -370,7 +405,20 @@ impl Effect {
             "plane_tilt" => Self::PlaneTilt(PlaneTilt { angle: a }),
             "shoulder_drift" => Self::ShoulderDrift(ShoulderDrift { k: a }),
             "active_torque" => Self::ActiveTorque(ActiveTorque { amp: a, freq: b }),
-            _ => Self::GraspSlip(GraspSlip { shift: a, at: b }),
+            "grasp_slip" => Self::GraspSlip(GraspSlip { shift: a, at: b }),
+            "passive_stiffness" => Self::PassiveStiffness(PassiveStiffness {
+                shoulder: a,
+                elbow: b,
+            }),
+            "spasticity" => Self::Spasticity(Spasticity {
+                gain: a,
+                threshold: b,
+            }),
+            "shoulder_rhythm" => Self::ShoulderRhythm(ShoulderRhythm { x: a, z: b }),
+            _ => Self::CuffOffset(CuffOffset {
+                across: a,
+                along: b,
+            }),
         })
     }
 
@@ -410,6 +458,10 @@ impl Effect {
             Self::ShoulderDrift(_) => 7,
             Self::ActiveTorque(_) => 8,
             Self::GraspSlip(_) => 9,
+            Self::PassiveStiffness(_) => 10,
+            Self::Spasticity(_) => 11,
+            Self::ShoulderRhythm(_) => 12,
+            Self::CuffOffset(_) => 13,
         };
         &CATALOGUE[index]
     }
@@ -427,6 +479,10 @@ impl Effect {
             Self::ShoulderDrift(e) => vec![e.k],
             Self::ActiveTorque(e) => vec![e.amp, e.freq],
             Self::GraspSlip(e) => vec![e.shift, e.at],
+            Self::PassiveStiffness(e) => vec![e.shoulder, e.elbow],
+            Self::Spasticity(e) => vec![e.gain, e.threshold],
+            Self::ShoulderRhythm(e) => vec![e.x, e.z],
+            Self::CuffOffset(e) => vec![e.across, e.along],
         }
     }
 }
@@ -454,6 +510,14 @@ pub struct Effects {
     pub active_torque: Option<ActiveTorque>,
     /// Grasp slide.
     pub grasp_slip: Option<GraspSlip>,
+    /// Passive elastic joint torques.
+    pub passive_stiffness: Option<PassiveStiffness>,
+    /// Velocity-dependent elbow reflex.
+    pub spasticity: Option<Spasticity>,
+    /// Shoulder centre moving with the elevation.
+    pub shoulder_rhythm: Option<ShoulderRhythm>,
+    /// Grasp off the forearm's line.
+    pub cuff_offset: Option<CuffOffset>,
 }
 
 impl Effects {
@@ -482,6 +546,10 @@ impl Effects {
                 Effect::ShoulderDrift(e) => put(&mut set.shoulder_drift, e, name)?,
                 Effect::ActiveTorque(e) => put(&mut set.active_torque, e, name)?,
                 Effect::GraspSlip(e) => put(&mut set.grasp_slip, e, name)?,
+                Effect::PassiveStiffness(e) => put(&mut set.passive_stiffness, e, name)?,
+                Effect::Spasticity(e) => put(&mut set.spasticity, e, name)?,
+                Effect::ShoulderRhythm(e) => put(&mut set.shoulder_rhythm, e, name)?,
+                Effect::CuffOffset(e) => put(&mut set.cuff_offset, e, name)?,
             }
         }
         Ok(set)

@@ -2,7 +2,7 @@
 //! diagnoser that is told nothing of the arm (lengths fitted).
 //!
 //! Each log draws, from one seeded stream: in three logs of four a class
-//! uniformly among the ten effects of `plant.md` and `none`, in the
+//! uniformly among the fourteen effects of the catalogue and `none`, in the
 //! fourth a pair of distinct effects; a random arm (l1 uniform in
 //! [`UPPER_ARMS`], l2 in [`FOREARMS`]); the effects' parameters from
 //! [`RANGES`]; and the noise seed. The reference plant (`limb-sim`, noise
@@ -55,8 +55,11 @@ use serde::Serialize;
 /// How one parameter is drawn: (name, low, high, logarithmic, either sign).
 pub type Range = (&'static str, f64, f64, bool, bool);
 
-/// The draw of each effect's parameters, in [`CATALOGUE`] order.
-pub const RANGES: [&[Range]; 10] = [
+/// The draw of each effect's parameters, in [`CATALOGUE`] order. A
+/// person's arm's effects (the last four) reach down to a few times the
+/// noise floor at their small end (`spec/human-arm.md`, "Self-check
+/// draws").
+pub const RANGES: [&[Range]; 14] = [
     &[
         ("coulomb", 0.05, 1.0, true, false),
         ("viscous", 0.05, 1.0, true, false),
@@ -79,9 +82,25 @@ pub const RANGES: [&[Range]; 10] = [
         ("shift", 0.004, 0.04, true, true),
         ("at", 4.0, 22.0, false, false),
     ],
+    &[
+        ("shoulder", 0.05, 2.0, true, false),
+        ("elbow", 0.05, 2.0, true, false),
+    ],
+    &[
+        ("gain", 0.05, 3.0, true, false),
+        ("threshold", 0.0, 0.08, false, false),
+    ],
+    &[
+        ("x", 0.002, 0.03, true, true),
+        ("z", 0.002, 0.03, true, true),
+    ],
+    &[
+        ("across", 0.004, 0.04, true, true),
+        ("along", -0.02, 0.05, false, false),
+    ],
 ];
 
-/// The classes: the ten effects, then `none`.
+/// The classes: the fourteen effects, then `none`.
 pub fn classes() -> Vec<&'static str> {
     CATALOGUE
         .iter()
@@ -378,24 +397,56 @@ struct Drawn {
     seed: u64,
 }
 
+/// Which effects a run draws.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Focus {
+    /// Every effect of the catalogue (the single-effect and clean logs
+    /// uniformly over the fourteen effects and `none`).
+    All,
+    /// A person's arm's effects ([`HUMAN_ARM`]): single-effect and clean
+    /// logs uniformly over those four and `none`; each pair holds one of
+    /// them and any other effect of the catalogue.
+    HumanArm,
+}
+
+/// The classes (indices in [`CATALOGUE`] order) of a person's arm's own
+/// effects: `passive_stiffness`, `spasticity`, `shoulder_rhythm`,
+/// `cuff_offset`.
+pub const HUMAN_ARM: [usize; 4] = [10, 11, 12, 13];
+
 /// Draws log `index` from `random` (every draw of a log comes before the
 /// next log's, so a run's logs do not depend on how they are diagnosed).
-fn draw_case(index: usize, random: &mut Gaussian) -> Result<Drawn, DiagnoseError> {
+fn draw_case(index: usize, random: &mut Gaussian, focus: Focus) -> Result<Drawn, DiagnoseError> {
     let names = classes();
     let effects_count = RANGES.len();
-    let classes: Vec<usize> = if index % PAIR_EVERY == PAIR_EVERY - 1 {
-        let first = pick(random, effects_count);
-        let mut second = pick(random, effects_count - 1);
-        if second >= first {
-            second += 1;
+    let classes: Vec<usize> = match (focus, index % PAIR_EVERY == PAIR_EVERY - 1) {
+        (Focus::All, true) => {
+            let first = pick(random, effects_count);
+            let mut second = pick(random, effects_count - 1);
+            if second >= first {
+                second += 1;
+            }
+            vec![first, second]
         }
-        vec![first, second]
-    } else {
-        let class = pick(random, names.len());
-        (class < effects_count)
-            .then_some(class)
-            .into_iter()
-            .collect()
+        (Focus::All, false) => {
+            let class = pick(random, names.len());
+            (class < effects_count)
+                .then_some(class)
+                .into_iter()
+                .collect()
+        }
+        (Focus::HumanArm, true) => {
+            let first = HUMAN_ARM[pick(random, HUMAN_ARM.len())];
+            let mut second = pick(random, effects_count - 1);
+            if second >= first {
+                second += 1;
+            }
+            vec![first, second]
+        }
+        (Focus::HumanArm, false) => {
+            let class = pick(random, HUMAN_ARM.len() + 1);
+            HUMAN_ARM.get(class).copied().into_iter().collect()
+        }
     };
     let l1 = UPPER_ARMS[0] + random.uniform() * (UPPER_ARMS[1] - UPPER_ARMS[0]);
     let l2 = FOREARMS[0] + random.uniform() * (FOREARMS[1] - FOREARMS[0]);
@@ -488,10 +539,24 @@ pub fn run(
     threads: usize,
     progress: &(dyn Fn(&Case) + Sync),
 ) -> Result<Summary, DiagnoseError> {
+    run_focused(logs, seed, threads, Focus::All, progress)
+}
+
+/// [`run`] drawing the effects of `focus`.
+///
+/// # Errors
+/// As [`run`].
+pub fn run_focused(
+    logs: usize,
+    seed: u64,
+    threads: usize,
+    focus: Focus,
+    progress: &(dyn Fn(&Case) + Sync),
+) -> Result<Summary, DiagnoseError> {
     let names = classes();
     let mut random = Gaussian::new(seed);
     let drawn = (0..logs)
-        .map(|index| draw_case(index, &mut random))
+        .map(|index| draw_case(index, &mut random, focus))
         .collect::<Result<Vec<_>, _>>()?;
     let cases = parallel_map(logs, threads, |index| {
         let c = case(&drawn[index])?;

@@ -16,8 +16,9 @@ use crate::model::{Candidate, Parameter, Scale};
 use limb_kernel::estimation::{estimate_arm, Method};
 use limb_kernel::path::{is_due, PathSample, PATH_CAPACITY};
 use limb_sim::effects::{
-    active_torque, backlash, descriptor, grasp_compliance, grasp_slip, joint_friction, latency,
-    mass_mismatch, plane_tilt, quantization, shoulder_drift,
+    active_torque, backlash, cuff_offset, descriptor, grasp_compliance, grasp_slip, joint_friction,
+    latency, mass_mismatch, passive_stiffness, plane_tilt, quantization, shoulder_drift,
+    shoulder_rhythm, spasticity,
 };
 use limb_sim::log::Record;
 
@@ -82,6 +83,27 @@ pub fn candidates(duration: f64) -> Vec<Candidate> {
                 (-0.05, 0.05, Linear),
                 (0.0, duration.clamp(1.0, 60.0), Linear),
             ],
+        ),
+        // A person's arm's own effects (`spec/human-arm.md`).
+        one(
+            "passive_stiffness",
+            &passive_stiffness::PARAMETERS,
+            &[log(0.002, 10.0), log(0.002, 10.0)],
+        ),
+        one(
+            "spasticity",
+            &spasticity::PARAMETERS,
+            &[log(0.002, 50.0), (0.0, 0.5, Linear)],
+        ),
+        one(
+            "shoulder_rhythm",
+            &shoulder_rhythm::PARAMETERS,
+            &[(-0.1, 0.1, Linear), (-0.1, 0.1, Linear)],
+        ),
+        one(
+            "cuff_offset",
+            &cuff_offset::PARAMETERS,
+            &[(-0.08, 0.08, Linear), (-0.05, 0.15, Linear)],
         ),
     ]
 }

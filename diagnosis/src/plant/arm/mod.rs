@@ -11,6 +11,7 @@
 //! withheld effects, diagnosed without the arm.
 
 pub mod blind;
+pub mod curves;
 pub mod effects;
 pub mod model;
 pub mod outcome;
