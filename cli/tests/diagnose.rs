@@ -43,7 +43,7 @@ fn json_has_the_contract_keys_and_the_report_is_written() {
     assert_eq!(json["arm"]["given"], true);
     assert_eq!(json["arm"]["l1"], 0.3);
     let ranking = json["ranking"].as_array().unwrap();
-    assert_eq!(ranking.len(), 10);
+    assert_eq!(ranking.len(), 14);
     assert_eq!(ranking[0]["effect"], "backlash");
     assert!(ranking[0]["score"].as_f64().unwrap() > 0.9);
     assert!((ranking[0]["params"]["width"].as_f64().unwrap() - 0.0261).abs() < 0.001);
@@ -261,7 +261,7 @@ fn the_blind_self_check_is_seeded_and_reports_its_figures() {
     );
     let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(json["logs"], 3);
-    assert_eq!(json["classes"].as_array().unwrap().len(), 11);
+    assert_eq!(json["classes"].as_array().unwrap().len(), 15);
     assert_eq!(json["answers"].as_array().unwrap().len(), 12);
     assert!(json["confusion"]
         .as_array()

@@ -1,5 +1,5 @@
 //! Time to diagnose one 29 s arm log, lengths not given (fitted with the
-//! effects), across all ten candidates, on one thread and on two, beside
+//! effects), across all fourteen candidates, on one thread and on two, beside
 //! its unit of work — one run of the reference plant over the same log —
 //! measured in the same process.
 //!
@@ -88,7 +88,7 @@ fn write_figures() {
          (criterion medians, 10 samples each, all three in one process; load average {load} \
          on 2 cores when the bench finished). The log: \
          `shared/data/effects/backlash.csv` (2 917 samples, 29.16 s), lengths not given (fitted), \
-         all ten candidates.\n\n\
+         all fourteen candidates.\n\n\
          | measured | median | plant runs |\n|---|---|---|\n\
          | one run of the reference plant over the log (the unit of work) | {:.2} ms | 1 |\n\
          | diagnosis, all candidates, 1 thread | {one:.2} s | {:.0} |\n\

@@ -51,7 +51,7 @@ fn every_labelled_log_is_diagnosed_as_its_effect() {
             misses.push(file.to_owned());
             continue;
         }
-        assert_eq!(d.ranking.len(), 10, "{file}: every candidate is ranked");
+        assert_eq!(d.ranking.len(), 14, "{file}: every candidate is ranked");
         if expected == "none" {
             assert_eq!(d.gap.shrink, 0.0, "{file}");
             assert!(d.location.signals.is_empty(), "{file}: {:?}", d.location);

@@ -124,6 +124,10 @@ fn no_effect_or_a_neutral_one_is_byte_identical_to_nominal() {
         ("plane_tilt", vec![("angle", 0.0)]),
         ("active_torque", vec![("amp", 0.0), ("freq", 1.0)]),
         ("grasp_slip", vec![("shift", 0.0), ("at", 5.0)]),
+        ("passive_stiffness", vec![("shoulder", 0.0), ("elbow", 0.0)]),
+        ("spasticity", vec![("gain", 0.0), ("threshold", 0.1)]),
+        ("shoulder_rhythm", vec![("x", 0.0), ("z", 0.0)]),
+        ("cuff_offset", vec![("across", 0.0), ("along", 0.0)]),
     ];
     for (name, params) in neutral {
         let effect = Effect::new(name, &params).unwrap();
@@ -181,5 +185,54 @@ fn simulation_of_each_shared_log_matches_it() {
                 limit[i]
             );
         }
+    }
+}
+
+/// The logged grasp of a person's arm's kinematic effects is where their
+/// geometry puts it (`spec/human-arm.md`): with `shoulder_rhythm` the
+/// shoulder sits at (L + x q1, z q1) and the grasp l2 from the elbow
+/// along the forearm; with `cuff_offset` the grasp is `across` off the
+/// forearm's line, frame S's origin the grasp at t = 0 (noise off).
+#[test]
+fn a_person_s_arm_s_geometry_is_the_logged_grasp() {
+    let (l1, l2) = (0.30, 0.20);
+    let grasp = |elbow: [f64; 2], psi: f64, across: f64| {
+        [
+            elbow[0] - l2 * psi.cos() + across * psi.sin(),
+            elbow[1] + l2 * psi.sin() + across * psi.cos(),
+        ]
+    };
+    let rhythm = Effect::new("shoulder_rhythm", &[("x", -0.02), ("z", 0.03)]).unwrap();
+    let cuff = Effect::new("cuff_offset", &[("across", 0.025), ("along", 0.04)]).unwrap();
+    for (effect, across) in [(rhythm, 0.0), (cuff, 0.025)] {
+        let rows = simulate(l1, l2, false, &[effect]);
+        let mut largest_q1: f64 = 0.0;
+        for row in &rows {
+            let (m, t) = (row.measurement, row.truth);
+            let g = grasp([t.elbow.x, t.elbow.z], m.pose.psi, across);
+            assert!(
+                (g[0] - m.pose.x).abs() < 1e-9 && (g[1] - m.pose.z).abs() < 1e-9,
+                "{}: grasp {g:?} against the logged ({}, {}) at t = {}",
+                effect.name(),
+                m.pose.x,
+                m.pose.z,
+                m.time
+            );
+            let q1 = t.q[0];
+            largest_q1 = largest_q1.max(q1);
+            let expected = match effect.name() {
+                "shoulder_rhythm" => [l1 + l2 - 0.02 * q1, 0.03 * q1],
+                _ => [l1 + l2, -across],
+            };
+            // q1 is the potentiometer's (0.0047 rad steps).
+            assert!(
+                (t.shoulder.x - expected[0]).abs() < 1e-4
+                    && (t.shoulder.z - expected[1]).abs() < 1e-4,
+                "{}: shoulder {:?} against {expected:?}",
+                effect.name(),
+                t.shoulder
+            );
+        }
+        assert!(largest_q1 > 0.5, "the lift elevates the upper arm");
     }
 }

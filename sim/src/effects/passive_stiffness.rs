@@ -27,12 +27,12 @@
 //!   = 0 (lying on the table) to 2.0 rad.
 //!
 //! # Magnitudes
-//! Passive elbow moments of healthy adults reach 1-3 N m within 10-20° of
-//! the end of range and are an order larger in a spastic or contracted
-//! arm; at mid-range they are a few tenths of a N m. Riener & Edrich's
-//! exponents are 0.03-0.06 per degree (2-3.5 per rad) over the whole
-//! range; the [`STEEPNESS`] of 3 per rad is of that order. Allowed:
-//! 0-10 N m per joint.
+//! A few tenths of a N m at mid-range to about 1-3 N m near the end of
+//! range in a relaxed healthy arm, several times that in a contracted or
+//! spastic one (an order of magnitude, not a fit to data). Riener &
+//! Edrich's exponents are of the order of a few per radian; the
+//! [`STEEPNESS`] of 3 per rad is of that order. Allowed: 0-10 N m per
+//! joint.
 
 use super::Parameter;
 
