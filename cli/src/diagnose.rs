@@ -39,6 +39,11 @@ pub struct DiagnoseArgs {
     /// Seed of the self-check's draws.
     #[arg(long, default_value_t = 1, requires = "self_check")]
     seed: u64,
+    /// The effects the self-check draws: `robot` (plant.md's ten, the
+    /// README's seeds), `human` (a person's arm's four, pairs with any
+    /// other), `all` (the fourteen).
+    #[arg(long, default_value = "robot", value_parser = ["robot", "human", "all"], requires = "self_check")]
+    focus: String,
     /// Worker threads fitting candidates side by side (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
@@ -70,7 +75,8 @@ pub fn run(args: &DiagnoseArgs) -> Result<(), CliError> {
         None => std::thread::available_parallelism().map_or(1, |n| n.get()),
     };
     if let Some(logs) = args.self_check {
-        return self_check(logs, args.seed, threads, args.json);
+        let focus = blind::Focus::parse(&args.focus).unwrap_or(blind::Focus::Robot);
+        return self_check(logs, args.seed, threads, focus, args.json);
     }
     let Some(log) = &args.log else {
         return Err(CliError::BadInput("diagnose needs LOG".into()));
@@ -251,14 +257,20 @@ pub fn write_report(path: &Path, subject: &Subject) -> Result<(), CliError> {
     })
 }
 
-fn self_check(logs: usize, seed: u64, threads: usize, json: bool) -> Result<(), CliError> {
+fn self_check(
+    logs: usize,
+    seed: u64,
+    threads: usize,
+    focus: blind::Focus,
+    json: bool,
+) -> Result<(), CliError> {
     if logs == 0 {
         return Err(CliError::BadInput(
             "--self-check needs at least one log".into(),
         ));
     }
     let progress = bar(logs, "logs diagnosed");
-    let summary = blind::run(logs, seed, threads, &|case| {
+    let summary = blind::run_focused(logs, seed, threads, focus, &|case| {
         if let Some(bar) = &progress {
             bar.inc(1);
             bar.set_message(format!("{:?} -> {:?}", case.truth, case.added));

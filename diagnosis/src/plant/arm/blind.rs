@@ -2,8 +2,9 @@
 //! diagnoser that is told nothing of the arm (lengths fitted).
 //!
 //! Each log draws, from one seeded stream: in three logs of four a class
-//! uniformly among the fourteen effects of the catalogue and `none`, in the
-//! fourth a pair of distinct effects; a random arm (l1 uniform in
+//! uniformly among the effects of the run's [`Focus`] and `none` (plant.md's
+//! ten, a person's arm's four, or all fourteen), in the fourth a pair of
+//! distinct effects (one of the focus's, any other); a random arm (l1 uniform in
 //! [`UPPER_ARMS`], l2 in [`FOREARMS`]); the effects' parameters from
 //! [`RANGES`]; and the noise seed. The reference plant (`limb-sim`, noise
 //! on) writes the log, ground truth is dropped, and
@@ -400,13 +401,42 @@ struct Drawn {
 /// Which effects a run draws.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Focus {
-    /// Every effect of the catalogue (the single-effect and clean logs
+    /// The ten effects of `plant.md` (a robot's: friction, backlash, …),
+    /// single-effect and clean logs uniformly over those ten and `none`:
+    /// the draws of the README's blind seeds, which this reproduces log
+    /// for log.
+    Robot,
+    /// Every effect of the catalogue (single-effect and clean logs
     /// uniformly over the fourteen effects and `none`).
     All,
     /// A person's arm's effects ([`HUMAN_ARM`]): single-effect and clean
     /// logs uniformly over those four and `none`; each pair holds one of
     /// them and any other effect of the catalogue.
     HumanArm,
+}
+
+impl Focus {
+    /// The effects (indices in [`CATALOGUE`] order) a single-effect log
+    /// draws from, and those a pair's second effect draws from.
+    fn draws(self) -> (&'static [usize], usize) {
+        const ROBOT: [usize; 10] = [0, 1, 2, 3, 4, 5, 6, 7, 8, 9];
+        const ALL: [usize; 14] = [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13];
+        match self {
+            Focus::Robot => (&ROBOT, ROBOT.len()),
+            Focus::All => (&ALL, ALL.len()),
+            Focus::HumanArm => (&HUMAN_ARM, ALL.len()),
+        }
+    }
+
+    /// The name a command line gives it.
+    pub fn parse(name: &str) -> Option<Focus> {
+        match name {
+            "robot" => Some(Focus::Robot),
+            "all" => Some(Focus::All),
+            "human" => Some(Focus::HumanArm),
+            _ => None,
+        }
+    }
 }
 
 /// The classes (indices in [`CATALOGUE`] order) of a person's arm's own
@@ -417,36 +447,19 @@ pub const HUMAN_ARM: [usize; 4] = [10, 11, 12, 13];
 /// Draws log `index` from `random` (every draw of a log comes before the
 /// next log's, so a run's logs do not depend on how they are diagnosed).
 fn draw_case(index: usize, random: &mut Gaussian, focus: Focus) -> Result<Drawn, DiagnoseError> {
-    let names = classes();
-    let effects_count = RANGES.len();
-    let classes: Vec<usize> = match (focus, index % PAIR_EVERY == PAIR_EVERY - 1) {
-        (Focus::All, true) => {
-            let first = pick(random, effects_count);
-            let mut second = pick(random, effects_count - 1);
-            if second >= first {
-                second += 1;
-            }
-            vec![first, second]
+    let (singles, pair_pool) = focus.draws();
+    let classes: Vec<usize> = if index % PAIR_EVERY == PAIR_EVERY - 1 {
+        // One of the focus's effects, then any other of the pool.
+        let first = singles[pick(random, singles.len())];
+        let mut second = pick(random, pair_pool - 1);
+        if second >= first {
+            second += 1;
         }
-        (Focus::All, false) => {
-            let class = pick(random, names.len());
-            (class < effects_count)
-                .then_some(class)
-                .into_iter()
-                .collect()
-        }
-        (Focus::HumanArm, true) => {
-            let first = HUMAN_ARM[pick(random, HUMAN_ARM.len())];
-            let mut second = pick(random, effects_count - 1);
-            if second >= first {
-                second += 1;
-            }
-            vec![first, second]
-        }
-        (Focus::HumanArm, false) => {
-            let class = pick(random, HUMAN_ARM.len() + 1);
-            HUMAN_ARM.get(class).copied().into_iter().collect()
-        }
+        vec![first, second]
+    } else {
+        // One of the focus's effects or `none` (the last draw).
+        let class = pick(random, singles.len() + 1);
+        singles.get(class).copied().into_iter().collect()
     };
     let l1 = UPPER_ARMS[0] + random.uniform() * (UPPER_ARMS[1] - UPPER_ARMS[0]);
     let l2 = FOREARMS[0] + random.uniform() * (FOREARMS[1] - FOREARMS[0]);
@@ -539,7 +552,7 @@ pub fn run(
     threads: usize,
     progress: &(dyn Fn(&Case) + Sync),
 ) -> Result<Summary, DiagnoseError> {
-    run_focused(logs, seed, threads, Focus::All, progress)
+    run_focused(logs, seed, threads, Focus::Robot, progress)
 }
 
 /// [`run`] drawing the effects of `focus`.
