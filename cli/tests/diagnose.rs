@@ -262,12 +262,13 @@ fn the_blind_self_check_is_seeded_and_reports_its_figures() {
     let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(json["logs"], 3);
     assert_eq!(json["classes"].as_array().unwrap().len(), 15);
-    assert_eq!(json["answers"].as_array().unwrap().len(), 12);
+    // The fourteen effects, `none` and `unexplained`.
+    assert_eq!(json["answers"].as_array().unwrap().len(), 16);
     assert!(json["confusion"]
         .as_array()
         .unwrap()
         .iter()
-        .all(|row| row.as_array().unwrap().len() == 12));
+        .all(|row| row.as_array().unwrap().len() == 16));
     let total: u64 = json["confusion"]
         .as_array()
         .unwrap()
