@@ -428,6 +428,19 @@ pub fn human(report: &SessionReport, header: &str) -> String {
         }
         None => writeln!(out, "model: none validated"),
     };
+    if let Some(s) = &report.stop {
+        let _ = writeln!(
+            out,
+            "stop at {:.3} s in {}: {}, category {}; over the {:.1} s after it the grasp sagged {:.2} mm, max |f| {:.1} N",
+            s.at,
+            s.state,
+            s.cause,
+            s.category,
+            s.watched_s,
+            s.sag_m * 1e3,
+            s.max_force_n
+        );
+    }
     if report.monitor_events.is_empty() {
         let _ = writeln!(out, "monitor events: none");
     } else {

@@ -101,8 +101,8 @@ fn req_stop_002_emergency_stops_hold_the_arm_on_the_six_arms() {
     println!("{table}worst sag {:.2} mm", worst * 1e3);
 }
 
-/// `--stop-at` refuses a time that is not one, and a session without it
-/// has no `stop` object.
+/// `--stop-at` refuses a time that is not one, a session without it has
+/// no `stop` object, and the text output names the stop in one line.
 #[test]
 fn a_bad_stop_time_is_refused_and_no_stop_has_no_object() {
     for bad in ["-1", "NaN", "inf", "soon"] {
@@ -114,4 +114,14 @@ fn a_bad_stop_time_is_refused_and_no_stop_has_no_object() {
     }
     let report = limb(&["run", "--json"]);
     assert!(report.get("stop").is_none(), "{report}");
+    // Without --json the stop is one line of text, by name.
+    let out = Command::new(env!("CARGO_BIN_EXE_limb"))
+        .args(["run", "--stop-at", "6"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("stop at 6.000 s in estimate: emergency_stop, category hold;"),
+        "{text}"
+    );
 }
