@@ -129,15 +129,25 @@ impl ImpedanceLaw {
                 - self.damping[i] * (v[i] - vd[i])
                 - self.stiffness[i] * (x[i] - xd[i]);
         }
-        let mut wrench = Wrench::new(f[0], f[1], f[2]);
+        let wrench = self.limit(Wrench::new(f[0], f[1], f[2]), &mut saturation);
+        ImpedanceOutput {
+            set_point,
+            wrench,
+            saturation,
+        }
+    }
+
+    /// `wrench` within the law's force magnitude and torque limits
+    /// (scaled, not clipped per axis), each limit that acted flagged in
+    /// `saturation`; zero, flagged non-finite, when anything is not finite.
+    /// Also applied to a stop's own wrench ([`crate::stop`]), which may
+    /// have been commanded under wider limits than the current ones.
+    pub fn limit(&self, wrench: Wrench, saturation: &mut Saturation) -> Wrench {
         if !wrench.is_finite() {
             saturation.non_finite = true;
-            return ImpedanceOutput {
-                set_point,
-                wrench: Wrench::ZERO,
-                saturation,
-            };
+            return Wrench::ZERO;
         }
+        let mut wrench = wrench;
         let force = wrench.force_magnitude();
         if force > self.max_force {
             let scale = self.max_force / force;
@@ -149,11 +159,7 @@ impl ImpedanceLaw {
             wrench.ty = libm::copysign(self.max_torque, wrench.ty);
             saturation.torque = true;
         }
-        ImpedanceOutput {
-            set_point,
-            wrench,
-            saturation,
-        }
+        wrench
     }
 }
 

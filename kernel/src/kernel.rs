@@ -234,19 +234,21 @@ impl Kernel {
         let now = self.stop_clock;
         let set_point = stop.set_point(now);
         let mut saturation = Saturation::default();
+        // The stop's own wrench was commanded under the limits of its
+        // time; limits updated since (allowed in SafeStop) bound it too.
         let wrench = match (stop.category(), set_point) {
             (StopCategory::Hold, Some(set_point)) if finite => {
                 let out = self
                     .law
                     .command(frame.pose, self.rates.rates().velocity, set_point);
                 if out.saturation.non_finite {
-                    stop.ramped_wrench(now)
+                    self.law.limit(stop.ramped_wrench(now), &mut saturation)
                 } else {
                     saturation = out.saturation;
                     out.wrench
                 }
             }
-            _ => stop.ramped_wrench(now),
+            _ => self.law.limit(stop.ramped_wrench(now), &mut saturation),
         };
         Command {
             state: StateKind::SafeStop,
@@ -616,13 +618,17 @@ impl Kernel {
             Cause::Stop(reason),
         );
         // The stopping step's own wrench: the stop's (the frame that
-        // tripped is not used to command).
+        // tripped is not used to command), within the current limits (they
+        // may have been lowered since it was commanded: found by the
+        // kernel_sequence fuzz target).
+        let mut saturation = Saturation::default();
+        let wrench = self.law.limit(stop.ramped_wrench(now), &mut saturation);
         Command {
             state: StateKind::SafeStop,
             mode: CommandMode::Stop,
             set_point: stop.set_point(now),
-            wrench: stop.ramped_wrench(now),
-            saturation: Saturation::default(),
+            wrench,
+            saturation,
             stop: Some(stop.category()),
         }
     }

@@ -183,3 +183,36 @@ fn req_stop_001_motors_off_commands_nothing() {
     };
     assert!(pushing.check(&limits).is_err());
 }
+
+/// REQ-STOP-001: a stop's wrench stays within the limits of
+/// the moment it is commanded, also when they were lowered after the
+/// wrench it ramps down from (Grasp allows a limit update). Found by the
+/// `kernel_sequence` fuzz target: the first stop command repeated the
+/// wrench commanded under the wider limits.
+#[test]
+fn req_stop_001_a_stop_wrench_obeys_limits_lowered_before_it() {
+    let (mut kernel, mut time) = holding_the_lifted_arm();
+    // The arm pushed 5 cm above the Grasp hold over 1 s: the spring pulls
+    // it back with about 10 N.
+    let mut pose = LIFTED;
+    let mut command = None;
+    for _ in 0..1000 {
+        pose.z += 0.05 / 1000.0;
+        command = Some(kernel.step(&frame(time, pose, WEIGHT), time));
+        time += PERIOD;
+    }
+    let pulled = command.unwrap().wrench.force_magnitude();
+    assert!(pulled > 8.0, "{pulled} N");
+    let mut limits = kernel.config().limits;
+    limits.max_force = 5.0;
+    kernel.update_limits(limits).unwrap();
+    // A non-finite frame: a ramp-down from the wrench commanded last.
+    let nan = frame(time, Pose::new(f64::NAN, pose.z, pose.psi), WEIGHT);
+    let first = kernel.step(&nan, time);
+    assert_eq!(first.stop, Some(StopCategory::RampDown));
+    assert!(first.wrench.force_magnitude() <= 5.0 + 1e-9, "{first:?}");
+    assert!(first.saturation.force, "{first:?}");
+    assert_eq!(first.check(&kernel.config().limits), Ok(()));
+    let next = kernel.step(&nan, time + PERIOD);
+    assert!(next.wrench.force_magnitude() <= 5.0 + 1e-9, "{next:?}");
+}
