@@ -153,6 +153,14 @@ impl ImpedanceLaw {
             let scale = self.max_force / force;
             wrench.fx *= scale;
             wrench.fz *= scale;
+            // A subnormal limit loses the scaling's precision (found by
+            // the kernel_sequence fuzz target at 5.4e-312 N): never above
+            // the limit, zero force rather than a rounded one.
+            // (Rounding of a normal limit, a few ulps, is kept.)
+            if wrench.force_magnitude() > self.max_force * (1.0 + 1e-12) {
+                wrench.fx = 0.0;
+                wrench.fz = 0.0;
+            }
             saturation.force = true;
         }
         if libm::fabs(wrench.ty) > self.max_torque {

@@ -72,6 +72,9 @@ pub struct Kernel {
     /// The latest finite time a stop has been stepped at (its move and
     /// ramp never go back with a clock that does) [s].
     stop_clock: f64,
+    /// The force magnitude of the last ramp-down command [N]: a ramp-down
+    /// never commands more (limits raised during it do not raise it).
+    ramp_force: f64,
     /// Running mean (time constant [`HOLDING_TIME_CONSTANT`]) of the
     /// holding pose x − f_ext/K of the trusted frames less the set-point
     /// commanded before each: where a stop's set-point holds the arm,
@@ -125,6 +128,7 @@ impl Kernel {
             last_now: None,
             commanded: None,
             stop_clock: f64::NAN,
+            ramp_force: f64::INFINITY,
             holding_offset: None,
             trace: Trace::default(),
         }
@@ -250,6 +254,7 @@ impl Kernel {
             }
             _ => self.law.limit(stop.ramped_wrench(now), &mut saturation),
         };
+        let wrench = self.ramp_bounded(stop.category(), wrench);
         Command {
             state: StateKind::SafeStop,
             mode: CommandMode::Stop,
@@ -258,6 +263,24 @@ impl Kernel {
             saturation,
             stop: Some(stop.category()),
         }
+    }
+
+    /// A ramp-down's `wrench` no larger in force than the ramp-down's
+    /// previous command (REQ-STOP-001: its force only falls, also when the
+    /// limits are raised during it); other categories unchanged.
+    fn ramp_bounded(&mut self, category: StopCategory, wrench: Wrench) -> Wrench {
+        if category != StopCategory::RampDown {
+            return wrench;
+        }
+        let force = wrench.force_magnitude();
+        let wrench = if force > self.ramp_force {
+            let scale = self.ramp_force / force;
+            Wrench::new(wrench.fx * scale, wrench.fz * scale, wrench.ty)
+        } else {
+            wrench
+        };
+        self.ramp_force = self.ramp_force.min(wrench.force_magnitude());
+        wrench
     }
 
     /// Updates the running mean of the holding pose's offset from the
@@ -622,7 +645,9 @@ impl Kernel {
         // may have been lowered since it was commanded: found by the
         // kernel_sequence fuzz target).
         let mut saturation = Saturation::default();
+        self.ramp_force = f64::INFINITY;
         let wrench = self.law.limit(stop.ramped_wrench(now), &mut saturation);
+        let wrench = self.ramp_bounded(stop.category(), wrench);
         Command {
             state: StateKind::SafeStop,
             mode: CommandMode::Stop,
