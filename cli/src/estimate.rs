@@ -1,13 +1,15 @@
-//! `limb estimate LOG.csv [--method hough|ls|auto] [--json]`
+//! `limb estimate LOG.csv [--method hough|ls|auto|online] [--arm rod|person] [--json]`
 //! (`../shared/spec/cli.md`): fits the arm from an estimation-motion log.
 //! Ground-truth columns of the log are never read.
 
+use crate::arm_model::ArmModel;
 use crate::error::{emit, print_json, CliError};
 use limb_kernel::estimation::outlier::OUTLIER_WINDOW;
-use limb_kernel::estimation::{estimate_arm, FitEvidence, Method};
+use limb_kernel::estimation::{estimate_arm, estimate_online, FitEvidence, Method};
 use limb_kernel::geometry::Point;
 use limb_kernel::path::{is_due, PathSample, PATH_CAPACITY};
-use limb_kernel::validate::{validate, ValidationLimits};
+use limb_kernel::validate::validate;
+use limb_kernel::KernelConfig;
 use std::path::Path;
 
 /// The estimator to run (`--method`).
@@ -41,6 +43,14 @@ struct EstimateReport {
     l2: f64,
     elbow: [f64; 2],
     shoulder: [f64; 2],
+    /// The elbow path's centre and radius (the monitors' fixed shoulder
+    /// and upper arm; `shoulder` and `l1` without a shoulder-rhythm prior).
+    path_shoulder: [f64; 2],
+    path_l1: f64,
+    /// Robot pitch minus forearm elevation [rad] (`limb_kernel::arm`).
+    grasp_pitch_offset: f64,
+    /// The arm assumed (`--arm`).
+    arm: ArmModel,
     method: Method,
     samples: usize,
     evidence: FitEvidence,
@@ -57,7 +67,7 @@ struct EstimateReport {
 /// # Errors
 /// [`CliError::BadInput`] for an unreadable or malformed log, one longer than
 /// the kernel's path buffer, or a log the estimator cannot fit.
-pub fn run(log: &Path, method: MethodArg, json: bool) -> Result<(), CliError> {
+pub fn run(log: &Path, method: MethodArg, arm: ArmModel, json: bool) -> Result<(), CliError> {
     let records = crate::session_log::read_records(log)?;
     let path = at_path_rate(records.iter().map(limb_sim::log::Record::path_sample));
     if path.len() > PATH_CAPACITY {
@@ -67,23 +77,27 @@ pub fn run(log: &Path, method: MethodArg, json: bool) -> Result<(), CliError> {
             path.len()
         )));
     }
-    let estimate = estimate_arm(&path, method.into()).map_err(|error| {
+    let limits = arm.apply(KernelConfig::default()).validation;
+    let estimated = match method {
+        MethodArg::Online => estimate_online(&path, limits.shoulder_rhythm),
+        _ => estimate_arm(&path, method.into()),
+    };
+    let estimate = estimated.map_err(|error| {
         CliError::BadInput(format!(
             "{}: cannot estimate the arm: {error}",
             log.display()
         ))
     })?;
-    let rejection = validate(
-        &estimate,
-        grasp_at_rest(&path),
-        &ValidationLimits::default(),
-    )
-    .err();
+    let rejection = validate(&estimate, grasp_at_rest(&path), &limits).err();
     let report = EstimateReport {
         l1: estimate.upper_arm_length,
         l2: estimate.forearm_length,
         elbow: [estimate.elbow.x, estimate.elbow.z],
         shoulder: [estimate.shoulder.x, estimate.shoulder.z],
+        path_shoulder: [estimate.path_shoulder.x, estimate.path_shoulder.z],
+        path_l1: estimate.path_upper_arm_length,
+        grasp_pitch_offset: estimate.grasp_pitch_offset,
+        arm,
         method: estimate.method,
         samples: path.len(),
         evidence: estimate.evidence,

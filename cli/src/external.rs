@@ -18,6 +18,7 @@
 //! Python environment `plants/myoarm/setup.sh` makes (run once, on first
 //! use); `toy` runs `plants/toy/toy_plant.py` with the system `python3`.
 
+use crate::arm_model::ArmModel;
 use crate::error::{emit, print_json, CliError};
 use crate::run::{human, record_event, session, RunArgs, SessionReport, TrueJoints, TruthReport};
 use crate::session_log::LogFile;
@@ -49,6 +50,22 @@ pub struct PlantArgs {
     /// included.
     #[arg(long, default_value_t = 10.0)]
     pub plant_timeout: f64,
+}
+
+impl PlantArgs {
+    /// The arm the estimator assumes by default on this plant
+    /// ([`ArmModel`]): `rod` on the reference plant and `--plant toy`,
+    /// `person` on any other.
+    pub fn default_arm(&self) -> ArmModel {
+        let rod = self.plant_cmd.is_none()
+            && self.plant_tcp.is_none()
+            && self.plant != Some(NamedPlant::Myoarm);
+        if rod {
+            ArmModel::Rod
+        } else {
+            ArmModel::Person
+        }
+    }
 }
 
 /// Plants of this repository.

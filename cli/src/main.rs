@@ -3,6 +3,7 @@
 //! its own module and returns a [`CliError`] that maps to the exit code.
 
 mod arebo;
+mod arm_model;
 mod config;
 mod diagnose;
 mod diagnose_drive;
@@ -52,6 +53,10 @@ enum Command {
         /// Print one JSON object on stdout.
         #[arg(long)]
         json: bool,
+        /// The arm the estimator (`online`: its shoulder-rhythm prior) and
+        /// the validator assume: `rod` (default, plant.md) or `person`.
+        #[arg(long, value_enum, default_value = "rod")]
+        arm: arm_model::ArmModel,
     },
     /// Run the reference plant (optionally with unmodelled effects) and write its log.
     Simulate(simulate::SimulateArgs),
@@ -136,7 +141,12 @@ fn main() {
         },
         Command::Population(args) => population::run(&args),
         Command::Config => config::run(),
-        Command::Estimate { log, method, json } => estimate::run(&log, method, json),
+        Command::Estimate {
+            log,
+            method,
+            json,
+            arm,
+        } => estimate::run(&log, method, arm, json),
         Command::Simulate(args) => match matches.subcommand_matches("simulate") {
             Some(sub) => simulate::run(&args, sub),
             None => Err(CliError::Internal("simulate: no argument matches".into())),

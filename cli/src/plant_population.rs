@@ -7,6 +7,7 @@
 //! state. The kernel runs with its default configuration: nothing is tuned
 //! per subject and no truth reaches it.
 
+use crate::arm_model::ArmModel;
 use crate::error::{emit, print_json, CliError};
 use crate::external::{endpoint, myoarm_command, plant_session, NamedPlant, PlantArgs, RobotError};
 use crate::run::{JointExtremes, SessionReport};
@@ -37,6 +38,9 @@ pub struct PlantPopulationArgs {
     /// Write each session's log to DIR/NAME.csv.
     #[arg(long)]
     pub log_dir: Option<PathBuf>,
+    /// The arm the estimator assumes (default `person`; `limb run --arm`).
+    #[arg(long, value_enum)]
+    pub arm: Option<ArmModel>,
 }
 
 impl PlantPopulationArgs {
@@ -285,7 +289,7 @@ pub fn population(
                 });
                 let outcome = plant_session(
                     &job.endpoint,
-                    KernelConfig::default(),
+                    ArmModel::or(args.arm, ArmModel::Person).apply(KernelConfig::default()),
                     timeout,
                     log.as_deref(),
                     None,

@@ -564,6 +564,11 @@ pub struct RunArgs {
     /// Overrides the kernel's force limit [N] (e.g. below the lift force, to see a safe stop).
     #[arg(long)]
     pub max_force: Option<f64>,
+    /// The arm the estimator assumes: `rod` (a fixed shoulder) or `person`
+    /// (a shoulder that moves with elevation). Default: `rod` on the
+    /// reference plant and `--plant toy`, `person` on any other plant.
+    #[arg(long, value_enum)]
+    pub arm: Option<crate::arm_model::ArmModel>,
     /// Print one JSON object instead of the human report.
     #[arg(long)]
     pub json: bool,
@@ -584,7 +589,8 @@ pub struct RunArgs {
 
 /// The kernel configuration for `args`, checked.
 pub fn config(args: &RunArgs) -> Result<KernelConfig, CliError> {
-    let mut config = KernelConfig::default();
+    let arm = crate::arm_model::ArmModel::or(args.arm, args.plant.default_arm());
+    let mut config = arm.apply(KernelConfig::default());
     if let Some(max_force) = args.max_force {
         config.limits.max_force = max_force;
     }

@@ -52,6 +52,8 @@ fn a_toy_plant_session_completes_over_a_pipe() {
     let command = format!("{} --fault extra_key --at 5", toy());
     let out = limb(&[
         "run",
+        "--arm",
+        "rod",
         "--plant-cmd",
         &command,
         "--json",
@@ -134,7 +136,16 @@ fn a_toy_plant_session_runs_over_tcp() {
         .read_line(&mut first)
         .unwrap();
     let port = first.trim().trim_start_matches("listening on ");
-    let out = limb(&["run", "--plant-tcp", &format!("127.0.0.1:{port}"), "--json"]);
+    // The toy is plant.md's rod: `--arm rod` (the default on an external
+    // plant is a person's arm).
+    let out = limb(&[
+        "run",
+        "--arm",
+        "rod",
+        "--plant-tcp",
+        &format!("127.0.0.1:{port}"),
+        "--json",
+    ]);
     let report = common::json_of(&out);
     assert_eq!(report["completed"], true, "{report}");
     assert!((report["model"]["l1"].as_f64().unwrap() - 0.27).abs() < 0.55e-3);
@@ -252,6 +263,8 @@ fn a_population_of_plant_commands_is_one_session_each() {
     let bad = format!("{} --fault nan --at 50", toy());
     let out = limb(&[
         "population",
+        "--arm",
+        "rod",
         "--plant-cmd",
         &good,
         "--plant-cmd",
@@ -281,4 +294,23 @@ fn a_plant_exiting_with_a_failure_status_is_a_robot_failure() {
     let report: Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
     assert_eq!(report["robot_error"]["code"], "exit_status", "{report}");
     assert_eq!(report["completed"], false);
+}
+
+/// The arm profile of an external plant is a person's unless `--arm rod`
+/// says otherwise (`cli/src/arm_model.rs`): on the toy plant, which is
+/// plant.md's fixed-shoulder rod, the person's shoulder-rhythm prior puts
+/// the shoulder at rest 25.7 mm from the rod's fixed shoulder (l1 0.3 mm
+/// off, validated), where `--arm rod` gives it within 0.55 mm (the tests
+/// above).
+#[test]
+fn an_external_plant_is_a_persons_arm_unless_told_otherwise() {
+    let report = common::json_of(&limb(&["run", "--plant-cmd", &toy(), "--json"]));
+    assert_eq!(report["final_state"], "Validated", "{report}");
+    let l1 = report["model"]["error_l1"].as_f64().unwrap();
+    let shoulder = report["model"]["error_shoulder"].as_f64().unwrap();
+    assert!(l1.abs() < 5e-3, "error_l1 = {l1}");
+    assert!(
+        (0.015..0.035).contains(&shoulder),
+        "error_shoulder = {shoulder}"
+    );
 }

@@ -12,8 +12,17 @@
 //! ```
 //!
 //! The robot measures the whole grasp pose (x, z, psi), so the pose-based
-//! inverse kinematics is unique: E = G + l2 (cos psi, -sin psi), then q1 from
-//! the direction S → E. The point-based inverse (grasp point only) has two
+//! inverse kinematics is unique: E = G + l2 (cos(psi − δ), -sin(psi − δ)),
+//! then q1 from the direction S → E.
+//!
+//! δ, the *grasp pitch offset*, is the robot's measured pitch minus the
+//! forearm's elevation: constant, since the cuff is rigid on the forearm.
+//! On `plant.md`'s rod it is 0 (the grasp lies on the forearm's joint line
+//! and psi is the forearm's elevation); on a person the cuff sits on the
+//! wrist's surface, off the line through the elbow's centre (MyoArm m50:
+//! the elbow centre 10.7 mm above the cuff at rest, δ = 0.049 rad), and the
+//! robot's pitch is counted from its own start. The estimator measures δ
+//! from the forearm phase (`estimation::refine`). The point-based inverse (grasp point only) has two
 //! branches (elbow above or below the shoulder–grasp line) and is singular at
 //! full extension and at the shoulder; both cases are explicit errors.
 
@@ -30,6 +39,7 @@ pub struct ArmGeometry {
     upper_arm_length: f64,
     forearm_length: f64,
     shoulder: Point,
+    grasp_pitch_offset: f64,
 }
 
 /// Human joint angles [rad].
@@ -97,7 +107,28 @@ impl ArmGeometry {
             upper_arm_length,
             forearm_length,
             shoulder,
+            grasp_pitch_offset: 0.0,
         })
+    }
+
+    /// The same arm with grasp pitch offset δ [rad] (the module's theory of
+    /// operation): the robot's pitch reads the forearm's elevation plus δ.
+    ///
+    /// # Errors
+    /// [`KinematicsError::NonFinite`] for a NaN or infinite δ.
+    pub fn with_grasp_pitch_offset(self, offset: f64) -> Result<Self, KinematicsError> {
+        if !offset.is_finite() {
+            return Err(KinematicsError::NonFinite);
+        }
+        Ok(Self {
+            grasp_pitch_offset: offset,
+            ..self
+        })
+    }
+
+    /// Grasp pitch offset δ [rad]: measured pitch minus forearm elevation.
+    pub fn grasp_pitch_offset(&self) -> f64 {
+        self.grasp_pitch_offset
     }
 
     /// Upper-arm length l1 [m].
@@ -131,17 +162,14 @@ impl ArmGeometry {
         Pose::new(
             elbow.x - self.forearm_length * libm::cos(psi),
             elbow.z + self.forearm_length * libm::sin(psi),
-            psi,
+            psi + self.grasp_pitch_offset,
         )
     }
 
     /// Elbow position implied by a measured grasp pose (paper eq. 19-21):
-    /// E = G + l2 (cos psi, −sin psi).
+    /// E = G + l2 (cos(psi − δ), −sin(psi − δ)).
     pub fn elbow_from_pose(&self, pose: Pose) -> Point {
-        Point::new(
-            pose.x + self.forearm_length * libm::cos(pose.psi),
-            pose.z - self.forearm_length * libm::sin(pose.psi),
-        )
+        elbow_from_grasp(pose, self.forearm_length, self.grasp_pitch_offset)
     }
 
     /// Joint angles from a measured grasp pose (paper eq. 29 in frame S),
@@ -161,7 +189,7 @@ impl ArmGeometry {
         let q1 = libm::atan2(dz, dx);
         let q = JointAngles {
             shoulder_elevation: q1,
-            elbow_flexion: pose.psi - q1,
+            elbow_flexion: pose.psi - self.grasp_pitch_offset - q1,
         };
         Ok((q, libm::fabs(reach - self.upper_arm_length)))
     }
@@ -201,6 +229,32 @@ impl ArmGeometry {
             shoulder_elevation: q1,
             elbow_flexion: q2,
         })
+    }
+}
+
+/// The elbow implied by grasp pose `pose` (frame S), forearm length
+/// `forearm` [m] and grasp pitch offset `offset` [rad] (eq. 19-21 with the
+/// forearm's elevation psi − δ): E = G + l2 (cos(psi − δ), −sin(psi − δ)).
+pub fn elbow_from_grasp(pose: Pose, forearm: f64, offset: f64) -> Point {
+    let elevation = pose.psi - offset;
+    Point::new(
+        pose.x + forearm * libm::cos(elevation),
+        pose.z - forearm * libm::sin(elevation),
+    )
+}
+
+/// The grasp pitch offset δ [rad] that puts the elbow at `elbow` for
+/// grasp pose `pose` (both frame S): the pose's pitch minus the elevation
+/// of the forearm from `elbow` to the grasp point, wrapped to [−π, π]
+/// (one atan2: the refinement computes it for every forearm sample).
+pub fn pitch_offset_at(pose: Pose, elbow: Point) -> f64 {
+    use core::f64::consts::{PI, TAU};
+    let elevation = libm::atan2(pose.z - elbow.z, elbow.x - pose.x);
+    let offset = pose.psi - elevation;
+    if libm::fabs(offset) <= PI {
+        offset
+    } else {
+        offset - TAU * libm::round(offset / TAU)
     }
 }
 

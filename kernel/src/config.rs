@@ -314,7 +314,18 @@ impl KernelConfig {
             (F::MaxMethodDisagreement, v.max_method_disagreement),
             (F::MaxGeometryMismatch, v.max_geometry_mismatch),
             (F::MaxShoulderHeight, v.max_shoulder_height),
+            (F::MaxResidualBias, v.max_residual_bias),
+            (F::MaxRhythmCorrection, v.max_rhythm_correction),
         ])?;
+        for component in v.shoulder_rhythm {
+            finite(F::ShoulderRhythm, component)?;
+            if libm::fabs(component) > ValidationLimits::MAX_SHOULDER_RHYTHM {
+                return Err(ConfigError::new(
+                    F::ShoulderRhythm,
+                    ConfigProblem::BeyondCeiling,
+                ));
+            }
+        }
         for (field, min, max) in [
             (
                 F::MaxUpperArmLength,

@@ -375,12 +375,12 @@ impl Estimate {
             self.online.record(path);
         }
         if let Some((hold, reason)) = self.lift.settled(now, config.lift_shaping.settle_time) {
-            let refinement =
-                self.online
-                    .refinement(path.len())
-                    .ok_or(StopReason::EstimationFailed(
-                        EstimateError::UpperArmPhaseTooShort,
-                    ))?;
+            let refinement = self
+                .online
+                .refinement(path.len(), config.validation.shoulder_rhythm)
+                .ok_or(StopReason::EstimationFailed(
+                    EstimateError::UpperArmPhaseTooShort,
+                ))?;
             *self.lift.phase_mut() = LiftPhase::Concluding {
                 hold,
                 reason,

@@ -318,6 +318,8 @@ impl Rejection {
             Rejection::NoIndependentMethod => "no_independent_method",
             Rejection::GeometryInconsistent(_) => "geometry_inconsistent",
             Rejection::ShoulderOffTable(_) => "shoulder_off_table",
+            Rejection::ResidualBias(_) => "residual_bias",
+            Rejection::RhythmCorrectionTooLarge(_) => "rhythm_correction_too_large",
         }
     }
 
@@ -633,6 +635,12 @@ mod tests {
                 "geometry_inconsistent",
             ),
             (Rejection::ShoulderOffTable(0.1), 11, "shoulder_off_table"),
+            (Rejection::ResidualBias(0.1), 12, "residual_bias"),
+            (
+                Rejection::RhythmCorrectionTooLarge(0.1),
+                13,
+                "rhythm_correction_too_large",
+            ),
         ];
         for (rejection, code, name) in rejections {
             assert_eq!((rejection.code(), rejection.name()), (code, name));

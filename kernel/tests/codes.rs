@@ -66,6 +66,8 @@ fn fault_codes_are_stable() {
         (Rejection::NoIndependentMethod.code(), 9),
         (Rejection::GeometryInconsistent(0.1).code(), 10),
         (Rejection::ShoulderOffTable(0.1).code(), 11),
+        (Rejection::ResidualBias(0.1).code(), 12),
+        (Rejection::RhythmCorrectionTooLarge(0.1).code(), 13),
         (LiftEnd::ArcReached.code(), 1),
         (LiftEnd::JointMargin(Limit::ElbowFlexion).code(), 2),
         (LiftEnd::MotionComplete.code(), 3),
@@ -134,6 +136,13 @@ fn config_field_codes_are_stable() {
             "validation.max_geometry_mismatch",
         ),
         (F::MaxShoulderHeight, 609, "validation.max_shoulder_height"),
+        (F::ShoulderRhythm, 610, "validation.shoulder_rhythm"),
+        (F::MaxResidualBias, 611, "validation.max_residual_bias"),
+        (
+            F::MaxRhythmCorrection,
+            612,
+            "validation.max_rhythm_correction",
+        ),
     ];
     for (field, code, path) in table {
         assert_eq!((field.code(), field.path()), (code, path));

@@ -5,7 +5,8 @@ mod support {
     pub mod logs;
 }
 
-use limb_kernel::estimation::online::{elbow_point, OnlineEstimator, OnlinePhase};
+use limb_kernel::arm::elbow_from_grasp;
+use limb_kernel::estimation::online::{OnlineEstimator, OnlinePhase};
 use limb_kernel::estimation::outlier::OUTLIER_REACH;
 use limb_kernel::estimation::refine::{Progress, ITERATIONS, SAMPLES_PER_STEP};
 use limb_kernel::estimation::{estimate_arm, EstimateError, Method};
@@ -168,7 +169,7 @@ fn online_estimate_is_accurate_on_the_six_noisy_logs() {
     for case in 1..=6 {
         let log = logs::read(&format!("noisy/case{case}.csv"));
         let (l1, l2) = logs::case_lengths(case);
-        let estimate = estimate_online(&log.path).expect("estimate");
+        let estimate = estimate_online(&log.path, [0.0, 0.0]).expect("estimate");
         let shoulder = log.shoulder.expect("truth column");
         println!(
             "case {case}: l1 {:+.3} mm, l2 {:+.3} mm, shoulder {:.3} mm",
@@ -207,7 +208,9 @@ fn req_time_002_the_refinement_runs_in_bounded_slices() {
     let upper_arm = log.path.len() - split;
     let samples = ITERATIONS * forearm + (ITERATIONS + 1) * upper_arm + forearm + upper_arm;
     let run = |budget: usize| -> (usize, ArmEstimate) {
-        let mut refinement = online.refinement(log.path.len()).expect("split found");
+        let mut refinement = online
+            .refinement(log.path.len(), [0.0, 0.0])
+            .expect("split found");
         for calls in 1..=samples {
             if let Progress::Done(outcome) = refinement.advance(&log.path, budget) {
                 return (calls, outcome.expect("refined"));
@@ -334,13 +337,16 @@ fn the_joint_envelope_is_translation_invariant_and_widened_by_its_uncertainty() 
             if let (Some(e), Some(forearm), Some(upper)) =
                 (envelope, online.forearm(), online.upper_arm())
             {
-                let elbow = elbow_point(pose, forearm.circle.radius);
+                let elbow = elbow_from_grasp(pose, forearm.circle.radius, online.pitch_offset());
                 let shoulder = upper.circle.centre;
                 let nominal = (elbow.z - shoulder.z).atan2(shoulder.x - elbow.x);
                 let spread = 3.0 * (upper.centre_sd + forearm.radius_sd) / elbow.distance(shoulder);
                 assert!((e.max_shoulder_elevation - (nominal + spread)).abs() < 1e-9);
                 assert!(
-                    (e.min_elbow_flexion - (pose.psi - e.max_shoulder_elevation)).abs() < 1e-12
+                    (e.min_elbow_flexion
+                        - (pose.psi - online.pitch_offset() - e.max_shoulder_elevation))
+                        .abs()
+                        < 1e-12
                 );
                 widened += 1;
             }

@@ -168,12 +168,16 @@ proptest! {
             forearm_length: l2,
             elbow: Point::new(ex, ez),
             shoulder: Point::new(sx, sz),
+            path_shoulder: Point::new(sx, sz),
+            path_upper_arm_length: l1,
+            grasp_pitch_offset: 0.0,
             method: Method::Auto,
             evidence: FitEvidence {
                 forearm_arc: arcs.0,
                 upper_arm_arc: arcs.1,
                 forearm_residual: residuals.0,
                 upper_arm_residual: residuals.1,
+                residual_bias: 0.0,
                 method_disagreement: disagreement,
                 forearm_samples: 100,
                 upper_arm_samples: 100,
@@ -482,7 +486,7 @@ fn the_refinement_converges_quadratically_from_a_start_off_the_arm() {
         centre: Point::new(elbow.x + 0.005, elbow.z - 0.005),
         radius: l2 + 0.005,
     };
-    let mut refinement = Refinement::new(start, lift..rest + forearm, path.len());
+    let mut refinement = Refinement::new(start, lift..rest + forearm, path.len(), [0.0, 0.0]);
     let estimate = (0..100)
         .find_map(|_| match refinement.advance(&path, PATH_CAPACITY) {
             Progress::Done(outcome) => Some(outcome.expect("refined")),
@@ -531,7 +535,7 @@ fn a_refinement_over_too_short_a_phase_is_refused_by_name() {
         radius: 0.2,
     };
     let run = |forearm: core::ops::Range<usize>, len: usize| {
-        let mut refinement = Refinement::new(circle, forearm, len);
+        let mut refinement = Refinement::new(circle, forearm, len, [0.0, 0.0]);
         (0..100)
             .find_map(|_| match refinement.advance(&path[..len], PATH_CAPACITY) {
                 Progress::Done(outcome) => Some(outcome.map(|_| ())),
@@ -862,4 +866,121 @@ fn a_slip_needs_a_long_enough_stretch_after_the_jump() {
     let found = slip_of(150).expect("a slip with 150 samples after it");
     assert!((found.correction.slide - slide).abs() < 1e-6, "{found:?}");
     assert_eq!(slip_of(50), None);
+}
+
+/// A noise-free lift of a person's arm (`spec/human-arm-model.md`): the
+/// grasp off the forearm's joint line (the robot's pitch reads the
+/// forearm's elevation plus δ), the shoulder `height` above the resting
+/// elbow, and the glenohumeral centre moving by φ ρ as the elbow turns by
+/// φ about its position at rest (ρ in the arm's rest frame). The forearm
+/// turns 1.2 rad about the resting elbow, then the elbow 0.8 rad about the
+/// shoulder, the forearm keeping its flexion; 100 Hz.
+fn persons_lift(l1: f64, l2: f64, height: f64, offset: f64, rhythm: [f64; 2]) -> Vec<PathSample> {
+    let (rest, forearm, upper_arm) = (50usize, 1000usize, 1000usize);
+    let q1_rest = -(height / l1).asin();
+    let elbow = Point::new(l2, 0.02);
+    let shoulder = Point::new(elbow.x + l1 * q1_rest.cos(), elbow.z - l1 * q1_rest.sin());
+    let (ex, ez) = ((elbow.x - shoulder.x) / l1, (elbow.z - shoulder.z) / l1);
+    let (dx, dz) = (ez, -ex);
+    let [along, rise] = rhythm;
+    let (rx, rz) = (along * ex + rise * dx, along * ez + rise * dz);
+    (0..rest + forearm + upper_arm)
+        .map(|i| {
+            let forearm_part = (i.saturating_sub(rest).min(forearm)) as f64 / forearm as f64;
+            let phi = 0.8 * (i.saturating_sub(rest + forearm)) as f64 / upper_arm as f64;
+            // The elbow at angle φ about the resting shoulder, l1 from the
+            // moved one: E = S + t u, |t u − φ ρ| = l1.
+            let (ux, uz) = (
+                ex * phi.cos() + dx * phi.sin(),
+                ez * phi.cos() + dz * phi.sin(),
+            );
+            let along_u = phi * (ux * rx + uz * rz);
+            let t =
+                along_u + (along_u * along_u - phi * phi * (rx * rx + rz * rz) + l1 * l1).sqrt();
+            let e = Point::new(shoulder.x + t * ux, shoulder.z + t * uz);
+            // The humerus's elevation (from the moved shoulder), and the
+            // forearm's: the humerus's plus the elbow's flexion.
+            let humerus = (e.z - (shoulder.z + phi * rz)).atan2((shoulder.x + phi * rx) - e.x);
+            let elevation = humerus - q1_rest + 1.2 * forearm_part;
+            PathSample {
+                time: i as f64 * 0.01,
+                pose: Pose::new(
+                    e.x - l2 * elevation.cos(),
+                    e.z + l2 * elevation.sin(),
+                    elevation + offset,
+                ),
+                wrench: Wrench::ZERO,
+            }
+        })
+        .collect()
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+    /// REQ-EST-006: on a person's lift the kernel's estimator measures the
+    /// grasp pitch offset, and with the arm's rhythm as its prior recovers
+    /// l1 (glenohumeral centre at rest to elbow), l2 and the shoulder at
+    /// rest; without the prior (a fixed shoulder) the shoulder is that of
+    /// the elbow path, off by about the rhythm's reach.
+    #[test]
+    fn req_est_006_a_persons_arm_is_recovered_under_its_rhythm(
+        l1 in 0.24f64..0.34, l2 in 0.18f64..0.25, height in -0.02f64..0.06,
+        offset in -0.1f64..0.1, along in -0.03f64..0.0, rise in -0.02f64..0.0,
+    ) {
+        let path = persons_lift(l1, l2, height, offset, [along, rise]);
+        let q1_rest = -(height / l1).asin();
+        let shoulder = Point::new(l2 + l1 * q1_rest.cos(), 0.02 - l1 * q1_rest.sin());
+        prop_assert!((shoulder.z - 0.02 - height).abs() < 1e-12);
+        let e = limb_kernel::estimation::estimate_online(&path, [along, rise]).unwrap();
+        prop_assert!((e.grasp_pitch_offset - offset).abs() < 1e-6, "{e:?}");
+        prop_assert!((e.forearm_length - l2).abs() < 1e-6, "{e:?}");
+        prop_assert!((e.upper_arm_length - l1).abs() < 2e-4, "{} {l1}", e.upper_arm_length);
+        prop_assert!(e.shoulder.distance(shoulder) < 5e-4, "{:?} {shoulder:?}", e.shoulder);
+        // The rhythm's correction of l1 is bounded by the validator
+        // (6 mm); this property is about the fit, not that bound.
+        let limits = ValidationLimits {
+            shoulder_rhythm: [along, rise],
+            max_rhythm_correction: 0.1,
+            ..ValidationLimits::person()
+        };
+        prop_assert!(validate(&e, path[0].pose.point(), &limits).is_ok());
+        let fixed = limb_kernel::estimation::estimate_online(&path, [0.0, 0.0]).unwrap();
+        let reach = 0.8 * along.hypot(rise);
+        prop_assert!(fixed.shoulder.distance(shoulder) > 0.3 * reach, "{fixed:?}");
+    }
+}
+
+proptest! {
+    /// REQ-VAL-001 (the residual-bias evidence): the worst block mean is
+    /// the largest |mean| of the full blocks of `BIAS_BLOCK` residuals and of
+    /// a last block of at least half a block; a shorter tail is not judged;
+    /// a NaN residual makes it NaN.
+    #[test]
+    fn req_val_001_residual_bias_is_the_worst_block_mean(
+        blocks in prop::collection::vec(-0.01f64..0.01, 1..6),
+        tail in 0usize..limb_kernel::estimation::BIAS_BLOCK,
+        tail_value in -0.01f64..0.01,
+    ) {
+        use limb_kernel::estimation::{ResidualBias, BIAS_BLOCK};
+        let mut bias = ResidualBias::default();
+        for &mean in &blocks {
+            // Block values alternating ±1 mm about the block's mean.
+            for k in 0..BIAS_BLOCK {
+                bias.add(mean + if k % 2 == 0 { 1e-3 } else { -1e-3 });
+            }
+        }
+        for _ in 0..tail {
+            bias.add(tail_value);
+        }
+        let mut want = blocks.iter().fold(0.0f64, |w, m| w.max(m.abs()));
+        if tail * 2 >= BIAS_BLOCK {
+            want = want.max(tail_value.abs());
+        }
+        prop_assert!((bias.worst() - want).abs() < 1e-12, "{} {want}", bias.worst());
+        bias.add(f64::NAN);
+        for _ in 0..BIAS_BLOCK {
+            bias.add(0.0);
+        }
+        prop_assert!(bias.worst().is_nan());
+    }
 }

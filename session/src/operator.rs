@@ -54,11 +54,14 @@ impl Default for SessionPlan {
 /// The arm model the kernel validated, frame S.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FittedModel {
-    /// Upper-arm length l1 [m].
+    /// Upper-arm length l1 [m]: the glenohumeral centre at rest to the
+    /// elbow's centre.
     pub upper_arm_length: f64,
     /// Forearm length l2 [m].
     pub forearm_length: f64,
-    /// Shoulder [m].
+    /// Shoulder [m]: the glenohumeral centre at rest (the monitors use the
+    /// centre of the elbow's path, `ArmEstimate::path_shoulder`; the same
+    /// point for a fixed shoulder).
     pub shoulder: Point,
     /// Elbow at t = 0 [m].
     pub elbow: Point,
@@ -67,12 +70,12 @@ pub struct FittedModel {
 impl FittedModel {
     /// The model of `arm`.
     pub fn of(arm: &ValidatedArm) -> Self {
-        let geometry = arm.geometry();
+        let estimate = arm.estimate();
         Self {
-            upper_arm_length: geometry.upper_arm_length(),
-            forearm_length: geometry.forearm_length(),
-            shoulder: geometry.shoulder(),
-            elbow: arm.estimate().elbow,
+            upper_arm_length: estimate.upper_arm_length,
+            forearm_length: estimate.forearm_length,
+            shoulder: estimate.shoulder,
+            elbow: estimate.elbow,
         }
     }
 }

@@ -69,13 +69,16 @@ pub fn model_violation(p: Pose, config: &KernelConfig, arm: &ArmGeometry) -> boo
     if !p.is_finite() {
         return true;
     }
-    // Elbow from the grasp pose: E = G + l2 (cos psi, -sin psi).
-    let ex = p.x + arm.forearm_length() * p.psi.cos();
-    let ez = p.z - arm.forearm_length() * p.psi.sin();
+    // The forearm's elevation: the robot's pitch less the grasp pitch
+    // offset δ (spec/human-arm-model.md); the elbow from the grasp pose:
+    // E = G + l2 (cos psi', -sin psi').
+    let forearm = p.psi - arm.grasp_pitch_offset();
+    let ex = p.x + arm.forearm_length() * forearm.cos();
+    let ez = p.z - arm.forearm_length() * forearm.sin();
     let s = arm.shoulder();
     let reach = (s.x - ex).hypot(ez - s.z);
     let q1 = (ez - s.z).atan2(s.x - ex);
-    let q2 = p.psi - q1;
+    let q2 = forearm - q1;
     ez < -l.table_tolerance
         || (reach - arm.upper_arm_length()).abs() > l.max_model_mismatch
         || !l.shoulder_elevation.contains(q1)

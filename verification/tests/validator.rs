@@ -18,7 +18,7 @@ prop_compose! {
     /// Arbitrary fields (NaN and infinities included): mostly rejected.
     fn arbitrary_estimate()(l1 in number(), l2 in number(), ex in number(), ez in number(),
                             sx in number(), sz in number(), arcs in (number(), number()),
-                            residuals in (0.0..0.01f64, 0.0..0.01f64),
+                            residuals in (0.0..0.01f64, 0.0..0.01f64, 0.0..0.003f64, -0.01..0.01f64),
                             disagreement in prop::option::of(0.0..0.01f64)) -> ArmEstimate {
         estimate(l1, l2, Point::new(ex, ez), Point::new(sx, sz), arcs, residuals, disagreement)
     }
@@ -30,7 +30,7 @@ prop_compose! {
     fn straddling_estimate()(l1 in 0.15..0.50f64, l2 in 0.08..0.40f64,
                              lift in -0.03..0.03f64, angle in -0.1..0.1f64,
                              arcs in (0.2..0.6f64, 0.2..0.6f64),
-                             residuals in (0.0..0.008f64, 0.0..0.008f64),
+                             residuals in (0.0..0.008f64, 0.0..0.008f64, 0.0..0.002f64, -0.012..0.012f64),
                              disagreement in prop::option::of(0.0..0.008f64)) -> ArmEstimate {
         let elbow = Point::new(l2, lift);
         let shoulder = Point::new(elbow.x + l1 * angle.cos(), elbow.z + l1 * angle.sin());
@@ -44,20 +44,32 @@ fn estimate(
     elbow: Point,
     shoulder: Point,
     arcs: (f64, f64),
-    residuals: (f64, f64),
+    residuals: (f64, f64, f64, f64),
     disagreement: Option<f64>,
 ) -> ArmEstimate {
+    // The elbow path's circle through the resting elbow, its radius l1
+    // minus the rhythm's correction (`residuals.3`).
+    let path_l1 = l1 - residuals.3;
+    let scale = path_l1 / l1;
+    let path_shoulder = Point::new(
+        elbow.x + (shoulder.x - elbow.x) * scale,
+        elbow.z + (shoulder.z - elbow.z) * scale,
+    );
     ArmEstimate {
         upper_arm_length: l1,
         forearm_length: l2,
         elbow,
         shoulder,
+        path_shoulder,
+        path_upper_arm_length: path_l1,
+        grasp_pitch_offset: 0.0,
         method: Method::Auto,
         evidence: FitEvidence {
             forearm_arc: arcs.0,
             upper_arm_arc: arcs.1,
             forearm_residual: residuals.0,
             upper_arm_residual: residuals.1,
+            residual_bias: residuals.2,
             method_disagreement: disagreement,
             forearm_samples: 100,
             upper_arm_samples: 100,
@@ -70,13 +82,16 @@ proptest! {
     #![proptest_config(ProptestConfig::with_cases(4000))]
     /// REQ-VAL-001: whatever the estimate, an accepted model has finite
     /// lengths inside the anthropometric ranges, enough arc, small residuals
-    /// and methods that agree.
+    /// and residual bias, methods that agree, a start pose consistent with
+    /// the lengths, a shoulder within the profile's resting height and a
+    /// rhythm correction within its bound, under either profile (`rod`,
+    /// `person`).
     #[test]
     fn req_val_001_validator_never_accepts_outside_ranges(
         e in prop_oneof![arbitrary_estimate(), straddling_estimate()],
         grasp in prop_oneof![Just(Point::new(0.0, 0.0)), (number(), number()).prop_map(|(x, z)| Point::new(x, z))],
+        limits in prop_oneof![Just(ValidationLimits::default()), Just(ValidationLimits::person())],
     ) {
-        let limits = ValidationLimits::default();
         if let Ok(arm) = validate(&e, grasp, &limits) {
             let g = arm.geometry();
             prop_assert!(g.upper_arm_length().is_finite() && g.forearm_length().is_finite());
@@ -85,7 +100,10 @@ proptest! {
             prop_assert!(e.evidence.forearm_arc >= limits.min_arc && e.evidence.upper_arm_arc >= limits.min_arc);
             prop_assert!(e.evidence.forearm_residual <= limits.max_residual);
             prop_assert!(e.evidence.upper_arm_residual <= limits.max_residual);
-            prop_assert!(e.elbow.z.abs() <= limits.max_geometry_mismatch);
+            prop_assert!(e.evidence.residual_bias <= limits.max_residual_bias);
+            prop_assert!((e.upper_arm_length - e.path_upper_arm_length).abs() <= limits.max_rhythm_correction);
+            prop_assert!((g.upper_arm_length() - e.path_upper_arm_length).abs() == 0.0);
+            prop_assert!((e.elbow.distance(grasp) - g.forearm_length()).abs() <= limits.max_geometry_mismatch);
             prop_assert!(e.evidence.method_disagreement.is_none_or(|d| d <= limits.max_method_disagreement));
             prop_assert!((e.elbow.distance(e.shoulder) - g.upper_arm_length()).abs() <= limits.max_geometry_mismatch);
             prop_assert!((e.shoulder.z - e.elbow.z).abs() <= limits.max_shoulder_height);
@@ -102,12 +120,16 @@ fn req_val_001_a_consistent_estimate_is_accepted() {
         forearm_length: 0.20,
         elbow: Point::new(0.20, 0.0),
         shoulder: Point::new(0.50, 0.0),
+        path_shoulder: Point::new(0.50, 0.0),
+        path_upper_arm_length: 0.30,
+        grasp_pitch_offset: 0.0,
         method: Method::Auto,
         evidence: FitEvidence {
             forearm_arc: 1.2,
             upper_arm_arc: 1.2,
             forearm_residual: 0.001,
             upper_arm_residual: 0.001,
+            residual_bias: 0.0,
             method_disagreement: Some(0.001),
             forearm_samples: 100,
             upper_arm_samples: 100,

@@ -86,6 +86,12 @@ pub enum ConfigField {
     MaxGeometryMismatch = 608,
     /// `validation.max_shoulder_height`.
     MaxShoulderHeight = 609,
+    /// `validation.shoulder_rhythm`.
+    ShoulderRhythm = 610,
+    /// `validation.max_residual_bias`.
+    MaxResidualBias = 611,
+    /// `validation.max_rhythm_correction`.
+    MaxRhythmCorrection = 612,
 }
 
 impl ConfigField {
@@ -136,6 +142,9 @@ impl ConfigField {
             F::MaxMethodDisagreement => "validation.max_method_disagreement",
             F::MaxGeometryMismatch => "validation.max_geometry_mismatch",
             F::MaxShoulderHeight => "validation.max_shoulder_height",
+            F::ShoulderRhythm => "validation.shoulder_rhythm",
+            F::MaxResidualBias => "validation.max_residual_bias",
+            F::MaxRhythmCorrection => "validation.max_rhythm_correction",
         }
     }
 }

@@ -18,7 +18,64 @@ pub struct Circle {
     pub radius: f64,
 }
 
+/// Consecutive samples whose mean residual [`ResidualBias`] judges: 0.5 s
+/// of the path at its 100 Hz recording rate.
+pub const BIAS_BLOCK: usize = 50;
+
+/// The largest |mean geometric residual| over blocks of [`BIAS_BLOCK`]
+/// consecutive points [m], streamed: noise averages out of a block
+/// (0.15 mm RMS → ≈ 0.02 mm), a path that leaves its circle for a while (a
+/// grasp that slipped, play in the angle) does not. A last block of fewer
+/// than half [`BIAS_BLOCK`] points is not judged. NaN residuals make it NaN.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ResidualBias {
+    sum: f64,
+    count: usize,
+    worst: f64,
+}
+
+impl ResidualBias {
+    /// Adds the next point's residual [m].
+    pub fn add(&mut self, residual: f64) {
+        self.sum += residual;
+        self.count += 1;
+        if self.count >= BIAS_BLOCK {
+            self.close_block();
+        }
+    }
+
+    fn close_block(&mut self) {
+        if self.count > 0 && !self.worst.is_nan() {
+            let mean = libm::fabs(self.sum / self.count as f64);
+            // NaN propagates (and stays).
+            if mean.is_nan() || mean > self.worst {
+                self.worst = mean;
+            }
+        }
+        self.sum = 0.0;
+        self.count = 0;
+    }
+
+    /// The largest block mean so far, the open block included when it
+    /// holds at least half a block [m].
+    pub fn worst(mut self) -> f64 {
+        if self.count * 2 >= BIAS_BLOCK {
+            self.close_block();
+        }
+        self.worst
+    }
+}
+
 impl Circle {
+    /// [`ResidualBias`] of the geometric residuals over `points` [m].
+    pub fn residual_bias<I: Iterator<Item = Point>>(&self, points: I) -> f64 {
+        let mut bias = ResidualBias::default();
+        for p in points {
+            bias.add(p.distance(self.centre) - self.radius);
+        }
+        bias.worst()
+    }
+
     /// RMS of the geometric residuals |p − c| − r over `points` [m]; 0 for
     /// no points.
     pub fn rms_residual<I: Iterator<Item = Point>>(&self, points: I) -> f64 {

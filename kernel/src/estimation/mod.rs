@@ -31,7 +31,9 @@ pub mod outlier;
 mod phase;
 pub mod refine;
 
-pub use circle::{fit_circle_kasa, fit_circle_taubin, Circle, CircleFitError};
+pub use circle::{
+    fit_circle_kasa, fit_circle_taubin, Circle, CircleFitError, ResidualBias, BIAS_BLOCK,
+};
 pub use geometric::{fit_circle_geometric, GeometricFit};
 pub use grasp::{
     detect_compliance, detect_slip, fit_forearm_pose, FitPoint, ForearmPose, FreeCorrections,
@@ -76,6 +78,10 @@ pub struct FitEvidence {
     pub forearm_residual: f64,
     /// RMS geometric residual of the phase-2 fit [m].
     pub upper_arm_residual: f64,
+    /// Largest |mean residual| over 0.5 s blocks of either phase
+    /// ([`circle::ResidualBias`]) [m]: how far the path leaves its circle
+    /// for a while, which noise does not.
+    pub residual_bias: f64,
     /// Largest difference in l1 or l2 between independent methods [m];
     /// `None` when only one method ran.
     pub method_disagreement: Option<f64>,
@@ -100,8 +106,21 @@ pub struct ArmEstimate {
     pub forearm_length: f64,
     /// Elbow at the start of the motion [m].
     pub elbow: Point,
-    /// Shoulder centre [m].
+    /// Shoulder centre [m]: the glenohumeral centre at rest (with a
+    /// shoulder-rhythm prior; otherwise the fixed shoulder). l1 is measured
+    /// from it to the elbow's centre.
     pub shoulder: Point,
+    /// Centre of the elbow's path in the upper-arm phase [m]: the fixed
+    /// shoulder that best explains the lift, which the monitors use
+    /// (equal to `shoulder` without a shoulder-rhythm prior).
+    pub path_shoulder: Point,
+    /// Radius of the elbow's path about [`ArmEstimate::path_shoulder`] [m]
+    /// (equal to l1 without a shoulder-rhythm prior).
+    pub path_upper_arm_length: f64,
+    /// Grasp pitch offset δ [rad] (`crate::arm`): the robot's pitch minus
+    /// the forearm's elevation. Measured by [`Method::Online`]; the paper's
+    /// methods and `Auto` take the grasp on the forearm's joint line (0).
+    pub grasp_pitch_offset: f64,
     /// The method that produced it.
     pub method: Method,
     /// What the fits saw.
@@ -296,7 +315,7 @@ pub fn estimate_arm(path: &[PathSample], method: Method) -> Result<ArmEstimate, 
         return Err(EstimateError::NonFiniteSample);
     }
     let (phases, fits, method_disagreement) = match method {
-        Method::Online => return estimate_online(path),
+        Method::Online => return estimate_online(path, [0.0, 0.0]),
         Method::Ls => {
             let phases = detect_phases(path, &PointModel::GRASP)?;
             let fits = fit_ls(path, &phases, PointModel::GRASP)?;
@@ -334,12 +353,19 @@ pub fn estimate_arm(path: &[PathSample], method: Method) -> Result<ArmEstimate, 
         forearm_length: fits.forearm.radius,
         elbow: fits.forearm.centre,
         shoulder: fits.upper_arm.centre,
+        path_shoulder: fits.upper_arm.centre,
+        path_upper_arm_length: fits.upper_arm.radius,
+        grasp_pitch_offset: 0.0,
         method,
         evidence: FitEvidence {
             forearm_arc: fits.forearm.arc(forearm_points()),
             upper_arm_arc: fits.upper_arm.arc(elbow_points()),
             forearm_residual: fits.forearm.rms_residual(forearm_points()),
             upper_arm_residual: fits.upper_arm.rms_residual(elbow_points()),
+            residual_bias: refine::max_or_nan(
+                fits.forearm.residual_bias(forearm_points()),
+                fits.upper_arm.residual_bias(elbow_points()),
+            ),
             method_disagreement,
             forearm_samples,
             upper_arm_samples,
@@ -453,16 +479,21 @@ fn fit_robust(path: &[PathSample]) -> Result<(Phases, PhaseFits), EstimateError>
 /// # Errors
 /// No lift-off or no split ([`EstimateError::ForearmPhaseTooShort`],
 /// [`EstimateError::UpperArmPhaseTooShort`]), or a failed fit.
-pub fn estimate_online(path: &[PathSample]) -> Result<ArmEstimate, EstimateError> {
+/// `rhythm` is the shoulder-rhythm prior [m/rad]
+/// (`ValidationLimits::shoulder_rhythm`; `estimate_arm` uses none).
+pub fn estimate_online(
+    path: &[PathSample],
+    rhythm: [f64; 2],
+) -> Result<ArmEstimate, EstimateError> {
     let mut online = online::OnlineEstimator::new();
     for end in 1..=path.len().min(PATH_CAPACITY) {
         online.record(path.get(..end).unwrap_or(&[]));
     }
     let mut refinement = online
-        .refinement(path.len())
+        .refinement(path.len(), rhythm)
         .ok_or(EstimateError::UpperArmPhaseTooShort)?;
-    // Each call ends at least one pass: 2 ITERATIONS + 3 passes in all.
-    for _ in 0..2 * refine::ITERATIONS + 4 {
+    // Each call ends at least one pass: 3 ITERATIONS + 3 passes in all.
+    for _ in 0..3 * refine::ITERATIONS + 4 {
         if let refine::Progress::Done(outcome) = refinement.advance(path, PATH_CAPACITY) {
             return outcome;
         }

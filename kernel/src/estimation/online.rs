@@ -17,8 +17,10 @@
 //!    last [`DEPARTURE_WINDOW`] samples are flagged the grasp has left the
 //!    circle for good (the elbow has lifted), and the forearm phase ends
 //!    where that window starts;
-//! 3. in the upper-arm phase, adds the elbow point E = G + l2 (cos psi,
-//!    −sin psi) (eq. 19-21, l2 the provisional forearm at the split) of
+//! 3. in the upper-arm phase, adds the elbow point E = G + l2 (cos(psi − δ),
+//!    −sin(psi − δ)) (eq. 19-21, l2 the provisional forearm at the split,
+//!    δ the grasp pitch offset the provisional resting elbow implies for
+//!    the first recorded pose, `crate::arm`) of
 //!    each sample that is not an isolated outlier to a second set of
 //!    moments, [`OUTLIER_REACH`] samples late (the outlier test needs the
 //!    neighbours); after [`PROVISIONAL_ARC`] about its centre they give a
@@ -41,7 +43,7 @@ pub use super::phase::{
     DEPARTURE_PERCENT, DEPARTURE_TOLERANCE, DEPARTURE_WINDOW, LIFT_PSI, NOISE_MULTIPLE,
 };
 use super::refine::Refinement;
-use crate::arm::JointAngles;
+use crate::arm::{elbow_from_grasp, pitch_offset_at, JointAngles};
 use crate::geometry::{Point, Pose};
 use crate::path::PathSample;
 use crate::validate::ValidationLimits;
@@ -93,6 +95,8 @@ pub struct JointEnvelope {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct OnlineEstimator {
     phase: OnlinePhase,
+    rest: Option<Pose>,
+    pitch_offset: f64,
     lift: usize,
     lift_psi: f64,
     max_psi: f64,
@@ -121,6 +125,8 @@ impl OnlineEstimator {
     pub const fn new() -> Self {
         Self {
             phase: OnlinePhase::Resting,
+            rest: None,
+            pitch_offset: 0.0,
             lift: 0,
             lift_psi: 0.0,
             max_psi: 0.0,
@@ -155,6 +161,13 @@ impl OnlineEstimator {
         self.forearm.as_ref()
     }
 
+    /// The provisional grasp pitch offset δ [rad] (`crate::arm`): the
+    /// first recorded pose's pitch minus the forearm's elevation from the
+    /// provisional resting elbow; 0 before a provisional forearm.
+    pub fn pitch_offset(&self) -> f64 {
+        self.pitch_offset
+    }
+
     /// The provisional upper arm (l1 = radius, shoulder = centre), once it
     /// has swept [`PROVISIONAL_ARC`] and its radius is known to
     /// [`PROVISIONAL_PRECISION`] (3σ).
@@ -179,6 +192,7 @@ impl OnlineEstimator {
         if !(sample.pose.is_finite() && sample.wrench.is_finite()) {
             return;
         }
+        self.rest.get_or_insert(sample.pose);
         match self.phase {
             OnlinePhase::Resting => {
                 if sample.pose.psi > LIFT_PSI {
@@ -209,6 +223,9 @@ impl OnlineEstimator {
         if swept && self.forearm_moments.count() >= PROVISIONAL_SAMPLES {
             if let Ok(fit) = self.forearm_moments.fit() {
                 self.forearm = Some(fit);
+                if let Some(rest) = self.rest {
+                    self.pitch_offset = pitch_offset_at(rest, fit.circle.centre);
+                }
             }
         }
         let Some(fit) = self.forearm else {
@@ -260,7 +277,7 @@ impl OnlineEstimator {
         if is_isolated_outlier(path, index) {
             return;
         }
-        let elbow = elbow_point(sample.pose, forearm.circle.radius);
+        let elbow = elbow_from_grasp(sample.pose, forearm.circle.radius, self.pitch_offset);
         if self.upper_arm_moments.count() == 0 {
             self.first_elbow = elbow;
         }
@@ -281,11 +298,18 @@ impl OnlineEstimator {
     }
 
     /// The refinement of this estimate over a path of `path_len` samples,
-    /// once the upper-arm phase has begun.
-    pub fn refinement(&self, path_len: usize) -> Option<Refinement> {
+    /// once the upper-arm phase has begun, under shoulder-rhythm prior
+    /// `rhythm` [m/rad] ([`Refinement::new`]).
+    pub fn refinement(&self, path_len: usize, rhythm: [f64; 2]) -> Option<Refinement> {
         let forearm = self.forearm?;
-        (self.phase == OnlinePhase::UpperArm)
-            .then(|| Refinement::new(forearm.circle, self.lift..self.forearm_end, path_len))
+        (self.phase == OnlinePhase::UpperArm).then(|| {
+            Refinement::new(
+                forearm.circle,
+                self.lift..self.forearm_end,
+                path_len,
+                rhythm,
+            )
+        })
     }
 
     /// Worst-case joint angles at measured or commanded pose `pose` under
@@ -296,7 +320,8 @@ impl OnlineEstimator {
         if !pose.is_finite() {
             return None;
         }
-        let elbow = elbow_point(pose, forearm.circle.radius);
+        let offset = self.pitch_offset;
+        let elbow = elbow_from_grasp(pose, forearm.circle.radius, offset);
         let shoulder_elevation =
             |shoulder: Point| libm::atan2(elbow.z - shoulder.z, shoulder.x - elbow.x);
         let plausible = |fit: &&MomentFit| {
@@ -318,22 +343,13 @@ impl OnlineEstimator {
         };
         let q = JointAngles {
             shoulder_elevation: max_q1,
-            elbow_flexion: pose.psi - max_q1,
+            elbow_flexion: pose.psi - offset - max_q1,
         };
         q.is_finite().then_some(JointEnvelope {
             max_shoulder_elevation: q.shoulder_elevation,
             min_elbow_flexion: q.elbow_flexion,
         })
     }
-}
-
-/// The elbow implied by grasp pose `pose` and forearm length `forearm`
-/// (eq. 19-21, frame S): E = G + l2 (cos psi, −sin psi).
-pub fn elbow_point(pose: Pose, forearm: f64) -> Point {
-    Point::new(
-        pose.x + forearm * libm::cos(pose.psi),
-        pose.z - forearm * libm::sin(pose.psi),
-    )
 }
 
 /// Unsigned angle between `a` and `b` seen from `centre` [rad, 0..π].

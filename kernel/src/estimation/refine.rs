@@ -9,12 +9,23 @@
 //!    (minimising Σ wᵢ (|pᵢ − c| − r)², Cauchy weights wᵢ with a scale of
 //!    [`SCALE_MULTIPLE`] × the previous pass's RMS residual, at least
 //!    [`MIN_SCALE`]) on the forearm phase's grasp points: l2, resting elbow;
-//! 2. one pass of Kåsa moments of the upper-arm phase's elbow points under
-//!    the refined l2 (the algebraic answer, and the start of step 3);
-//! 3. [`ITERATIONS`] Gauss-Newton passes on those elbow points: l1,
-//!    shoulder;
-//! 4. one evidence pass per phase: RMS geometric residual and the arc
-//!    between its first and last point.
+//! 2. one evidence pass of the forearm phase: RMS geometric residual, the
+//!    arc between its first and last point, and the grasp pitch offset δ
+//!    (`crate::arm`), the mean over its samples of the pitch minus the
+//!    forearm's elevation from the refined resting elbow;
+//! 3. one pass of Kåsa moments of the upper-arm phase's elbow points under
+//!    the refined l2 and δ (the algebraic answer, and the start of step 4);
+//! 4. [`ITERATIONS`] Gauss-Newton passes on those elbow points: the
+//!    elbow path's circle (the effective fixed shoulder the monitors use);
+//! 5. with a shoulder-rhythm prior ρ (`ValidationLimits::shoulder_rhythm`),
+//!    [`ITERATIONS`] Gauss-Newton passes on the elbow points with the
+//!    shoulder's own motion taken out, Eᵢ − φᵢ ρ (φᵢ the elbow's angle
+//!    since rest about the current estimate, ρ in the arm's rest frame):
+//!    l1 and the glenohumeral centre at rest. Without a prior (a fixed
+//!    shoulder) they are the elbow path's circle and these passes are
+//!    skipped;
+//! 6. the upper-arm phase's evidence pass (RMS residual, arc) about the
+//!    elbow path's circle.
 //!
 //! Every pass leaves out the samples that are isolated outliers
 //! ([`super::outlier`]); the evidence counts them.
@@ -25,14 +36,18 @@
 //!
 //! # Bounds
 //! A pass costs about 60 flops, one square root and (elbow points) one
-//! sine and cosine per sample; a call does at most `budget` samples and at
-//! most one 3 × 3 solve. A whole refinement is 2 · [`ITERATIONS`] + 3 passes.
+//! sine and cosine per sample, the forearm's evidence and a rhythm pass
+//! one atan2 more; a call does at most `budget` samples (half
+//! of it in a rhythm pass) and at most one 3 × 3 solve. A whole refinement
+//! is 2 · [`ITERATIONS`] + 3 passes, 3 · [`ITERATIONS`] + 3 with a
+//! shoulder-rhythm prior.
 
-use super::circle::{Circle, CircleFitError};
+use super::circle::{Circle, CircleFitError, ResidualBias};
 use super::moments::CircleMoments;
-use super::online::{angle_between, elbow_point};
+use super::online::angle_between;
 use super::outlier::is_isolated_outlier;
 use super::{ArmEstimate, EstimateError, FitEvidence, Method};
+use crate::arm::{elbow_from_grasp, pitch_offset_at};
 use crate::geometry::Point;
 use crate::path::PathSample;
 use core::ops::Range;
@@ -58,12 +73,15 @@ pub const MIN_SCALE: f64 = 0.3e-3;
 pub enum Pass {
     /// Geometric fit of the forearm phase, iteration `0..ITERATIONS`.
     Forearm(usize),
+    /// Residual, arc and grasp pitch offset of the forearm phase.
+    ForearmEvidence,
     /// Kåsa moments of the upper-arm phase's elbow points.
     UpperArmMoments,
     /// Geometric fit of the upper-arm phase, iteration `0..ITERATIONS`.
     UpperArm(usize),
-    /// Residual and arc of the forearm phase.
-    ForearmEvidence,
+    /// Geometric fit of the upper-arm phase with the shoulder's rhythm
+    /// taken out, iteration `0..ITERATIONS`.
+    Rhythm(usize),
     /// Residual and arc of the upper-arm phase.
     UpperArmEvidence,
     /// Finished (or failed).
@@ -81,6 +99,8 @@ struct PassSums {
     count: usize,
     first: Option<Point>,
     last: Point,
+    pitch_offsets: f64,
+    bias: ResidualBias,
 }
 
 impl PassSums {
@@ -107,6 +127,7 @@ impl PassSums {
         self.weighted_squares += weight * residual * residual;
         self.weights += weight;
         self.squares += residual * residual;
+        self.bias.add(residual);
         self.count += 1;
         self.first.get_or_insert(point);
         self.last = point;
@@ -172,7 +193,11 @@ pub struct Refinement {
     forearm: Circle,
     upper_arm_kasa: Circle,
     upper_arm: Circle,
+    rhythm: [f64; 2],
+    rest: Circle,
     forearm_evidence: (f64, f64),
+    forearm_bias: f64,
+    pitch_offset: f64,
     /// Isolated outliers left out of (the forearm, the upper-arm) phase.
     outliers: (usize, usize),
     outcome: Option<Result<ArmEstimate, EstimateError>>,
@@ -180,8 +205,16 @@ pub struct Refinement {
 
 impl Refinement {
     /// Starts from the online forearm circle over `forearm` and the phase
-    /// split; the upper-arm phase runs from `forearm.end` to `path_len`.
-    pub fn new(forearm_circle: Circle, forearm: Range<usize>, path_len: usize) -> Self {
+    /// split; the upper-arm phase runs from `forearm.end` to `path_len`;
+    /// `rhythm` is the shoulder-rhythm prior [m/rad]
+    /// (`ValidationLimits::shoulder_rhythm`; non-finite components count
+    /// as 0).
+    pub fn new(
+        forearm_circle: Circle,
+        forearm: Range<usize>,
+        path_len: usize,
+        rhythm: [f64; 2],
+    ) -> Self {
         Self {
             forearm_range: (forearm.start, forearm.end),
             upper_arm_range: (forearm.end, path_len.max(forearm.end)),
@@ -194,7 +227,11 @@ impl Refinement {
             forearm: forearm_circle,
             upper_arm_kasa: forearm_circle,
             upper_arm: forearm_circle,
+            rhythm: rhythm.map(|r| if r.is_finite() { r } else { 0.0 }),
+            rest: forearm_circle,
             forearm_evidence: (0.0, 0.0),
+            forearm_bias: 0.0,
+            pitch_offset: 0.0,
             outliers: (0, 0),
             outcome: None,
         }
@@ -213,10 +250,17 @@ impl Refinement {
         }
         let range = match self.pass {
             Pass::Forearm(_) | Pass::ForearmEvidence => span(self.forearm_range),
-            Pass::UpperArmMoments | Pass::UpperArm(_) | Pass::UpperArmEvidence => {
-                span(self.upper_arm_range)
-            }
+            Pass::UpperArmMoments
+            | Pass::UpperArm(_)
+            | Pass::Rhythm(_)
+            | Pass::UpperArmEvidence => span(self.upper_arm_range),
             Pass::Done => return self.finish(Err(EstimateError::UpperArmPhaseTooShort)),
+        };
+        // A rhythm sample costs an elbow point and an atan2 more: half the
+        // budget keeps the step's cost below the elbow passes'.
+        let budget = match self.pass {
+            Pass::Rhythm(_) => budget.div_ceil(2),
+            _ => budget,
         };
         let start = range.start.saturating_add(self.cursor);
         let end = start.saturating_add(budget).min(range.end);
@@ -239,18 +283,22 @@ impl Refinement {
                     .add(&self.forearm, self.scale, sample.pose.point()),
                 Pass::ForearmEvidence => {
                     self.sums
-                        .add(&self.forearm, f64::INFINITY, sample.pose.point())
+                        .add(&self.forearm, f64::INFINITY, sample.pose.point());
+                    self.sums.pitch_offsets += pitch_offset_at(sample.pose, self.forearm.centre);
                 }
                 Pass::UpperArmMoments => {
-                    self.moments
-                        .add(elbow_point(sample.pose, self.forearm.radius));
+                    self.moments.add(self.elbow(sample));
                 }
                 Pass::UpperArm(_) => {
-                    let elbow = elbow_point(sample.pose, self.forearm.radius);
+                    let elbow = self.elbow(sample);
                     self.sums.add(&self.upper_arm, self.scale, elbow);
                 }
+                Pass::Rhythm(_) => {
+                    let elbow = self.without_rhythm(self.elbow(sample));
+                    self.sums.add(&self.rest, self.scale, elbow);
+                }
                 Pass::UpperArmEvidence => {
-                    let elbow = elbow_point(sample.pose, self.forearm.radius);
+                    let elbow = self.elbow(sample);
                     self.sums.add(&self.upper_arm, f64::INFINITY, elbow);
                 }
                 Pass::Done => {}
@@ -284,14 +332,12 @@ impl Refinement {
         Ok(match self.pass {
             Pass::Forearm(iteration) => {
                 self.forearm = self
-                    .sums
-                    .step(&self.forearm)
+                    .gauss_newton(self.forearm)
                     .map_err(EstimateError::ForearmFit)?;
-                self.scale = (SCALE_MULTIPLE * self.sums.weighted_rms()).max(MIN_SCALE);
                 if iteration + 1 < ITERATIONS {
                     Pass::Forearm(iteration + 1)
                 } else {
-                    Pass::UpperArmMoments
+                    Pass::ForearmEvidence
                 }
             }
             Pass::UpperArmMoments => {
@@ -303,27 +349,62 @@ impl Refinement {
             }
             Pass::UpperArm(iteration) => {
                 self.upper_arm = self
-                    .sums
-                    .step(&self.upper_arm)
+                    .gauss_newton(self.upper_arm)
                     .map_err(EstimateError::UpperArmFit)?;
-                self.scale = (SCALE_MULTIPLE * self.sums.weighted_rms()).max(MIN_SCALE);
                 if iteration + 1 < ITERATIONS {
                     Pass::UpperArm(iteration + 1)
                 } else {
-                    Pass::ForearmEvidence
+                    self.rest = self.upper_arm;
+                    if self.rhythm == [0.0, 0.0] {
+                        Pass::UpperArmEvidence
+                    } else {
+                        // The elbow points move by up to φ ρ from the
+                        // path's circle: no Cauchy scale from its fit.
+                        self.scale = f64::INFINITY;
+                        Pass::Rhythm(0)
+                    }
+                }
+            }
+            Pass::Rhythm(iteration) => {
+                self.rest = self
+                    .gauss_newton(self.rest)
+                    .map_err(EstimateError::UpperArmFit)?;
+                if iteration + 1 < ITERATIONS {
+                    Pass::Rhythm(iteration + 1)
+                } else {
+                    Pass::UpperArmEvidence
                 }
             }
             Pass::ForearmEvidence => {
                 self.forearm_evidence = (self.phase_arc(&self.forearm), self.sums.rms());
-                Pass::UpperArmEvidence
+                self.forearm_bias = self.sums.bias.worst();
+                // count ≥ 1: the pass had at least MIN_PHASE_SAMPLES samples
+                // and an all-outlier phase leaves the mean at 0.
+                self.pitch_offset = self.sums.pitch_offsets / self.sums.count.max(1) as f64;
+                if !self.pitch_offset.is_finite() {
+                    return Err(EstimateError::ForearmFit(CircleFitError::NonFinite));
+                }
+                Pass::UpperArmMoments
             }
             Pass::UpperArmEvidence => {
-                let estimate = self.estimate(self.phase_arc(&self.upper_arm), self.sums.rms());
+                let estimate = self.estimate(
+                    self.phase_arc(&self.upper_arm),
+                    self.sums.rms(),
+                    self.sums.bias.worst(),
+                );
                 self.outcome = Some(Ok(estimate));
                 Pass::Done
             }
             Pass::Done => Pass::Done,
         })
+    }
+
+    /// `circle` after the Gauss-Newton step of the pass just summed; the
+    /// next pass's Cauchy scale from its weighted RMS residual.
+    fn gauss_newton(&mut self, circle: Circle) -> Result<Circle, CircleFitError> {
+        let next = self.sums.step(&circle)?;
+        self.scale = (SCALE_MULTIPLE * self.sums.weighted_rms()).max(MIN_SCALE);
+        Ok(next)
     }
 
     fn phase_arc(&self, circle: &Circle) -> f64 {
@@ -332,21 +413,30 @@ impl Refinement {
         })
     }
 
-    fn estimate(&self, upper_arm_arc: f64, upper_arm_residual: f64) -> ArmEstimate {
+    fn estimate(
+        &self,
+        upper_arm_arc: f64,
+        upper_arm_residual: f64,
+        upper_arm_bias: f64,
+    ) -> ArmEstimate {
         let disagreement = libm::fabs(self.forearm.radius - self.forearm_kasa.radius).max(
             libm::fabs(self.upper_arm.radius - self.upper_arm_kasa.radius),
         );
         ArmEstimate {
-            upper_arm_length: self.upper_arm.radius,
+            upper_arm_length: self.rest.radius,
             forearm_length: self.forearm.radius,
             elbow: self.forearm.centre,
-            shoulder: self.upper_arm.centre,
+            shoulder: self.rest.centre,
+            path_upper_arm_length: self.upper_arm.radius,
+            path_shoulder: self.upper_arm.centre,
+            grasp_pitch_offset: self.pitch_offset,
             method: Method::Online,
             evidence: FitEvidence {
                 forearm_arc: self.forearm_evidence.0,
                 upper_arm_arc,
                 forearm_residual: self.forearm_evidence.1,
                 upper_arm_residual,
+                residual_bias: max_or_nan(self.forearm_bias, upper_arm_bias),
                 method_disagreement: Some(disagreement),
                 forearm_samples: span(self.forearm_range)
                     .len()
@@ -359,10 +449,48 @@ impl Refinement {
         }
     }
 
+    /// `elbow` with the shoulder's own motion since rest taken out under
+    /// the rhythm prior: E − φ ρ, with ρ in the arm's rest frame (unit e₀
+    /// from the current glenohumeral estimate S to the resting elbow, and
+    /// d = e₀ turned toward the elbow's rise) and φ the elbow's angle since
+    /// rest seen from S (the rhythm's parameter, `spec/human-arm-model.md`).
+    /// At the fixed point S = S_rest the corrected points lie on the circle
+    /// (S_rest, l1) exactly.
+    fn without_rhythm(&self, elbow: Point) -> Point {
+        let centre = self.rest.centre;
+        let rest = self.forearm.centre;
+        let (ax, az) = (rest.x - centre.x, rest.z - centre.z);
+        let norm = libm::hypot(ax, az);
+        if !(norm.is_finite() && norm > 0.0) {
+            return elbow;
+        }
+        let (ex, ez) = (ax / norm, az / norm);
+        let (dx, dz) = (ez, -ex);
+        let (vx, vz) = (elbow.x - centre.x, elbow.z - centre.z);
+        let [along, rise] = self.rhythm;
+        let (rx, rz) = (along * ex + rise * dx, along * ez + rise * dz);
+        let angle = libm::atan2(vx * dx + vz * dz, vx * ex + vz * ez);
+        Point::new(elbow.x - angle * rx, elbow.z - angle * rz)
+    }
+
+    /// The elbow of `sample` under the refined forearm and δ.
+    fn elbow(&self, sample: &PathSample) -> Point {
+        elbow_from_grasp(sample.pose, self.forearm.radius, self.pitch_offset)
+    }
+
     fn finish(&mut self, outcome: Result<ArmEstimate, EstimateError>) -> Progress {
         self.pass = Pass::Done;
         self.outcome = Some(outcome);
         Progress::Done(outcome)
+    }
+}
+
+/// The larger of `a` and `b`, NaN when either is.
+pub(crate) fn max_or_nan(a: f64, b: f64) -> f64 {
+    if a.is_nan() || b.is_nan() {
+        f64::NAN
+    } else {
+        a.max(b)
     }
 }
 
