@@ -7,8 +7,10 @@
 //! shifted (25 mm on MyoArm) and resized. So it is chosen by what is on the
 //! other end: `rod` for `plant.md`'s fixed-shoulder arm (the reference
 //! plant and `--plant toy`), `person` for anything else (`--plant myoarm`,
-//! `--plant-cmd`, `--plant-tcp`: a person, or a model of one). The choice is
-//! printed in the JSON (`arm`) and overridden by `--arm`.
+//! `--plant-cmd`, `--plant-tcp`: a person, or a model of one). `--arm`
+//! overrides it; `limb estimate --json` prints it (`arm`), and a `limb run
+//! --log` carries it in the logged configuration
+//! (`validation.shoulder_rhythm`).
 
 use limb_kernel::validate::ValidationLimits;
 use limb_kernel::KernelConfig;
@@ -26,11 +28,6 @@ pub enum ArmModel {
 }
 
 impl ArmModel {
-    /// `chosen`, or `default` when none was.
-    pub fn or(chosen: Option<Self>, default: Self) -> Self {
-        chosen.unwrap_or(default)
-    }
-
     /// `config` with this arm's validation limits (the shoulder-rhythm
     /// prior and the resting shoulder's height).
     pub fn apply(self, mut config: KernelConfig) -> KernelConfig {

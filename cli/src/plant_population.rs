@@ -289,7 +289,9 @@ pub fn population(
                 });
                 let outcome = plant_session(
                     &job.endpoint,
-                    ArmModel::or(args.arm, ArmModel::Person).apply(KernelConfig::default()),
+                    args.arm
+                        .unwrap_or(ArmModel::Person)
+                        .apply(KernelConfig::default()),
                     timeout,
                     log.as_deref(),
                     None,

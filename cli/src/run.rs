@@ -589,7 +589,7 @@ pub struct RunArgs {
 
 /// The kernel configuration for `args`, checked.
 pub fn config(args: &RunArgs) -> Result<KernelConfig, CliError> {
-    let arm = crate::arm_model::ArmModel::or(args.arm, args.plant.default_arm());
+    let arm = args.arm.unwrap_or_else(|| args.plant.default_arm());
     let mut config = arm.apply(KernelConfig::default());
     if let Some(max_force) = args.max_force {
         config.limits.max_force = max_force;

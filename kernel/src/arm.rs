@@ -22,7 +22,9 @@
 //! wrist's surface, off the line through the elbow's centre (MyoArm m50:
 //! the elbow centre 10.7 mm above the cuff at rest, δ = 0.049 rad), and the
 //! robot's pitch is counted from its own start. The estimator measures δ
-//! from the forearm phase (`estimation::refine`). The point-based inverse (grasp point only) has two
+//! from the forearm phase (`estimation::refine`).
+//!
+//! The point-based inverse (grasp point only) has two
 //! branches (elbow above or below the shoulder–grasp line) and is singular at
 //! full extension and at the shoulder; both cases are explicit errors.
 
