@@ -114,6 +114,80 @@ fn req_sm_003_target_outside_joint_limits_is_refused() {
     assert_eq!(kernel.state().kind(), StateKind::Validated);
 }
 
+/// REQ-SM-003: a target within the joint limits whose grasp point lies
+/// outside the workspace box is refused with the workspace violation (not
+/// the joint limits), and the kernel stays in Validated. With the default
+/// limits every target that passes the joint limits lies inside the box,
+/// so the box is narrowed the way a clinician would, by a limit update in
+/// Validated (REQ-SM-007) that keeps the held arm inside it; the same
+/// target is accepted once the default box is restored.
+#[test]
+fn req_sm_003_target_outside_the_workspace_is_refused() {
+    use limb_kernel::config::{Interval, SafetyLimits};
+    use limb_kernel::monitor::Limit;
+    use limb_kernel::State;
+    let (mut kernel, t) = kernel_in(StateKind::Validated);
+    let State::Validated(validated) = kernel.state() else {
+        panic!("the lift did not validate");
+    };
+    let hold = validated.hold().pose;
+    let goal = validated.arm().geometry().forward(TARGET);
+    // A box in x whose edge lies halfway between the held grasp point and
+    // the target's: the arm is held inside it, the target is outside.
+    let edge = 0.5 * (hold.x + goal.x);
+    assert!(
+        (hold.x - goal.x).abs() > 0.02,
+        "hold {hold:?}, goal {goal:?}"
+    );
+    let default = SafetyLimits::default();
+    let workspace_x = if goal.x < hold.x {
+        Interval::new(edge, default.workspace_x.high)
+    } else {
+        Interval::new(default.workspace_x.low, edge)
+    };
+    kernel
+        .update_limits(SafetyLimits {
+            workspace_x,
+            ..default
+        })
+        .expect("a narrower workspace is a valid limit update in Validated");
+    let refusal = kernel
+        .request(Request::ApproveManipulation(TARGET), t)
+        .unwrap_err();
+    let RefusalReason::Target(TargetError::Workspace(violation)) = refusal.reason else {
+        panic!("refused for {:?}, not the workspace", refusal.reason);
+    };
+    assert_eq!(violation.limit, Limit::WorkspaceX);
+    assert_eq!(violation.value, goal.x);
+    assert_eq!(refusal.reason.code(), 4);
+    assert_eq!(TargetError::Workspace(violation).code(), 2);
+    assert!(refusal
+        .reason
+        .to_string()
+        .starts_with("target: workspace: workspace_x"));
+    assert_eq!(
+        (refusal.request, refusal.state),
+        (Request::ApproveManipulation(TARGET), StateKind::Validated)
+    );
+    assert_eq!(kernel.state().kind(), StateKind::Validated);
+    // The held arm is inside the narrowed box: the next step holds.
+    let command = kernel.step(
+        &limb_kernel::PathSample {
+            time: t + 0.01,
+            pose: hold,
+            wrench: limb_verification::scenario::LIFT_WRENCH,
+        },
+        t + 0.01,
+    );
+    assert_eq!(command.state, StateKind::Validated);
+    // The same target within the default box is accepted.
+    kernel.update_limits(default).unwrap();
+    assert_eq!(
+        kernel.request(Request::ApproveManipulation(TARGET), t + 0.01),
+        Ok(StateKind::Manipulate)
+    );
+}
+
 /// REQ-SM-004: estimation starts only from a fresh, finite measurement,
 /// and no request is honoured with a non-finite or reversed clock.
 #[test]
