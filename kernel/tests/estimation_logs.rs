@@ -18,56 +18,85 @@ use limb_kernel::path::PATH_CAPACITY;
 use limb_kernel::validate::{validate, ValidationLimits};
 use support::logs;
 
-/// `Auto` recovers l1 and l2 within 1 mm and the shoulder within 2 mm on all
-/// six arms, and the default validator accepts every estimate.
+/// Margin over a figure the READMEs state (README.md, Estimation;
+/// kernel/src/estimation/README.md, its tables) [m]: they give millimetres
+/// to two decimals, so 0.01 mm covers their rounding (≤ 0.005 mm) and no
+/// more; a change that costs more accuracy than that fails here, and the
+/// figures are then re-measured, not the bounds loosened.
+const MARGIN: f64 = 0.01e-3;
+
+/// Errors |Δl1|, |Δl2| and the shoulder distance [m] of `estimate` on
+/// noisy log `case`, printed in mm.
+fn noisy_errors(case: usize, name: &str, estimate: &ArmEstimate, log: &logs::Log) -> [f64; 3] {
+    let (l1, l2) = logs::case_lengths(case);
+    let shoulder = log.shoulder.expect("truth column");
+    let errors = [
+        (estimate.upper_arm_length - l1).abs(),
+        (estimate.forearm_length - l2).abs(),
+        estimate.shoulder.distance(shoulder),
+    ];
+    println!(
+        "case {case} {name}: l1 {:.4} mm, l2 {:.4} mm, shoulder {:.4} mm",
+        errors[0] * 1e3,
+        errors[1] * 1e3,
+        errors[2] * 1e3
+    );
+    errors
+}
+
+/// Asserts `errors` (l1, l2, shoulder) within `claimed` [m] plus
+/// [`MARGIN`].
+fn assert_within(errors: [f64; 3], claimed: [f64; 3], what: &str) {
+    for ((error, claimed), name) in errors.iter().zip(claimed).zip(["l1", "l2", "shoulder"]) {
+        assert!(
+            *error <= claimed + MARGIN,
+            "{what}: {name} {:.4} mm beyond the stated {:.3} mm",
+            error * 1e3,
+            claimed * 1e3
+        );
+    }
+}
+
+/// `Auto` recovers l1, l2 and the shoulder on all six arms within the
+/// README's 0.10 / 0.02 / 0.12 mm (measured: 0.104 / 0.019 / 0.116 mm at
+/// worst) plus [`MARGIN`], and the default validator accepts every
+/// estimate.
 #[test]
 fn auto_is_accurate_and_validated_on_the_six_noisy_logs() {
     for case in 1..=6 {
         let log = logs::read(&format!("noisy/case{case}.csv"));
-        let (l1, l2) = logs::case_lengths(case);
         let estimate = estimate_arm(&log.path, Method::Auto).expect("estimate");
-        let shoulder = log.shoulder.expect("truth column");
-        assert!(
-            (estimate.upper_arm_length - l1).abs() <= 0.15e-3,
-            "case {case}: l1 {estimate:?}"
-        );
-        assert!(
-            (estimate.forearm_length - l2).abs() <= 1e-3,
-            "case {case}: l2 {estimate:?}"
-        );
-        assert!(
-            estimate.shoulder.distance(shoulder) <= 2e-3,
-            "case {case}: shoulder {estimate:?}"
-        );
+        let errors = noisy_errors(case, "auto", &estimate, &log);
+        assert_within(errors, [0.10e-3, 0.02e-3, 0.12e-3], &format!("case {case}"));
         let grasp_start = log.path[0].pose.point();
         validate(&estimate, grasp_start, &ValidationLimits::default())
             .unwrap_or_else(|r| panic!("case {case}: rejected {r:?}"));
     }
 }
 
-/// The paper's methods stay within 1 mm too on noise of `plant.md`.
+/// The paper's methods on noise of `plant.md` stay within the worst
+/// errors of kernel/src/estimation/README.md's table (l1 / l2 / shoulder:
+/// Hough 0.14 / 0.03 / 0.18 mm, measured 0.136 / 0.032 / 0.177 mm; Kåsa
+/// 0.09 / 0.07 / 0.14 mm, measured 0.094 / 0.066 / 0.144 mm) plus
+/// [`MARGIN`].
 #[test]
-fn hough_and_ls_are_within_a_millimetre_on_the_six_noisy_logs() {
+fn hough_and_ls_are_as_accurate_as_their_table_on_the_six_noisy_logs() {
     for case in 1..=6 {
         let log = logs::read(&format!("noisy/case{case}.csv"));
-        let (l1, l2) = logs::case_lengths(case);
-        for method in [Method::Hough, Method::Ls] {
+        for (method, claimed) in [
+            (Method::Hough, [0.14e-3, 0.03e-3, 0.18e-3]),
+            (Method::Ls, [0.09e-3, 0.07e-3, 0.14e-3]),
+        ] {
             let e = estimate_arm(&log.path, method).expect("estimate");
-            assert!(
-                (e.upper_arm_length - l1).abs() <= 1e-3,
-                "case {case} {method:?}: {e:?}"
-            );
-            assert!(
-                (e.forearm_length - l2).abs() <= 1e-3,
-                "case {case} {method:?}: {e:?}"
-            );
+            let errors = noisy_errors(case, &format!("{method:?}"), &e, &log);
+            assert_within(errors, claimed, &format!("case {case} {method:?}"));
         }
     }
 }
 
 /// Outliers (every 37th sample thrown 5 cm off) and a short corrupted
 /// stretch (0.2 s, 10 cm off, in either phase) move the `Auto` estimate by
-/// less than 0.25 mm (measured: 0.024, 0.035 and 0.0004 mm; without its
+/// less than 0.25 mm (measured: 0.005, 0.035 and 0.0004 mm; without its
 /// robust weights the outliers alone shift a fit by about 5 cm / 37).
 #[test]
 fn outliers_and_a_corrupted_stretch_move_auto_by_less_than_a_quarter_millimetre() {
@@ -124,8 +153,11 @@ fn errors(log: &logs::Log, l1: f64, l2: f64, method: Method) -> [f64; 3] {
 
 /// On every labelled effect log `Auto` is never worse than the paper's
 /// Kåsa fit by more than 1 mm (l1, l2, shoulder), and for grasp compliance
-/// and grasp slip it is within 1.5 mm and 0.25 mm of the truth where Kåsa
-/// is centimetres off.
+/// and grasp slip it is within the errors measured for kernel/src/
+/// estimation/README.md's table (l1 / l2 / shoulder: compliance 0.40 /
+/// 0.85 / 1.23 mm, slip 0.012 / 0.028 / 0.060 mm; the README: 0.9 mm on
+/// l2, 0.06 mm on the shoulder) plus [`MARGIN`] where Kåsa is off by the
+/// README's 237 mm on l2 (compliance) and 22.7 mm on the shoulder (slip).
 #[test]
 fn auto_is_never_worse_than_kasa_and_corrects_compliance_and_slip() {
     for labelled in logs::labelled_effects() {
@@ -139,21 +171,24 @@ fn auto_is_never_worse_than_kasa_and_corrects_compliance_and_slip() {
                 labelled.effect
             );
         }
-        // Measured: compliance 0.40 / 0.85 / 1.23 mm, slip 0.012 / 0.028 /
-        // 0.060 mm (l1, l2, shoulder).
-        let bound = match labelled.effect.as_str() {
-            "grasp_compliance" => Some(1.5e-3),
-            "grasp_slip" => Some(0.25e-3),
+        // Measured: compliance 0.396 / 0.846 / 1.232 mm, slip 0.012 /
+        // 0.028 / 0.060 mm (l1, l2, shoulder); Kåsa 236.72 mm on the
+        // compliance log's l2, 22.71 mm on the slip log's shoulder.
+        let claims = match labelled.effect.as_str() {
+            "grasp_compliance" => Some(([0.40e-3, 0.85e-3, 1.23e-3], 1, 236.7e-3)),
+            "grasp_slip" => Some(([0.012e-3, 0.028e-3, 0.060e-3], 2, 22.7e-3)),
             _ => None,
         };
-        if let Some(bound) = bound {
-            assert!(
-                auto.iter().all(|&a| a <= bound),
-                "{}: {auto:?}",
-                labelled.effect
+        if let Some((claimed, axis, kasa_off)) = claims {
+            println!(
+                "{}: auto {:.4?} mm, kasa {:.4?} mm",
+                labelled.effect,
+                auto.map(|a| a * 1e3),
+                kasa.map(|k| k * 1e3)
             );
+            assert_within(auto, claimed, &labelled.effect);
             assert!(
-                kasa.iter().any(|&k| k >= 1e-2),
+                kasa[axis] >= kasa_off - MARGIN,
                 "{}: {kasa:?}",
                 labelled.effect
             );
@@ -161,33 +196,19 @@ fn auto_is_never_worse_than_kasa_and_corrects_compliance_and_slip() {
     }
 }
 
-/// The online estimator replayed over each log is within 0.15 mm of l1 and
-/// 0.10 mm of l2, its shoulder within 0.2 mm (measured: 0.100 / 0.084 /
-/// 0.161 mm at worst; `Auto`: 0.10 / 0.02 / 0.12 mm).
+/// The online estimator replayed over each log is within the READMEs'
+/// 0.106 mm of l1 and 0.084 mm of l2, its shoulder within 0.167 mm (the
+/// worst measured; `Auto`: 0.10 / 0.02 / 0.12 mm), plus [`MARGIN`].
 #[test]
 fn online_estimate_is_accurate_on_the_six_noisy_logs() {
     for case in 1..=6 {
         let log = logs::read(&format!("noisy/case{case}.csv"));
-        let (l1, l2) = logs::case_lengths(case);
         let estimate = estimate_online(&log.path, [0.0, 0.0]).expect("estimate");
-        let shoulder = log.shoulder.expect("truth column");
-        println!(
-            "case {case}: l1 {:+.3} mm, l2 {:+.3} mm, shoulder {:.3} mm",
-            (estimate.upper_arm_length - l1) * 1e3,
-            (estimate.forearm_length - l2) * 1e3,
-            estimate.shoulder.distance(shoulder) * 1e3
-        );
-        assert!(
-            (estimate.upper_arm_length - l1).abs() <= 0.15e-3,
-            "case {case}: {estimate:?}"
-        );
-        assert!(
-            (estimate.forearm_length - l2).abs() <= 0.10e-3,
-            "case {case}: {estimate:?}"
-        );
-        assert!(
-            estimate.shoulder.distance(shoulder) <= 0.2e-3,
-            "case {case}: {estimate:?}"
+        let errors = noisy_errors(case, "online", &estimate, &log);
+        assert_within(
+            errors,
+            [0.106e-3, 0.084e-3, 0.167e-3],
+            &format!("case {case}"),
         );
     }
 }
@@ -459,10 +480,12 @@ fn skipped_samples_do_not_move_the_online_split() {
 
 /// REQ-EST-005: isolated outliers (a sample thrown 5.8 cm off, on every
 /// 37th or every 11th sample) are left out of the fits and counted: on the
-/// six noisy logs the kernel's online estimate moves by less than 0.1 mm
-/// from its clean answer and is still validated (measured: at most
-/// 0.043 mm), and `Auto` on the labelled `none`, compliance and slip logs
-/// by less than 0.2 mm from its own clean answer (measured: at most
+/// six noisy logs the kernel's online estimate moves from its clean answer
+/// by at most kernel/src/estimation/README.md's 0.05 mm plus [`MARGIN`]
+/// (the requirement: less than 0.1 mm; measured: at most 0.043 mm) and is
+/// still validated, and `Auto` on the labelled `none`, compliance and slip
+/// logs from its own clean answer by at most that README's 0.08 mm plus
+/// [`MARGIN`] (the requirement: less than 0.2 mm; measured: at most
 /// 0.077 mm). Before the outlier test: `Auto` 33 mm off on the compliance
 /// log (its compliance went undetected) and 22 mm on the slip log; the
 /// online estimate 0.5-0.7 m off.
@@ -509,11 +532,16 @@ fn req_est_005_isolated_outliers_are_left_out_and_counted() {
         check(
             &format!("noisy/case{case}.csv"),
             Method::Online,
-            0.1e-3,
+            0.05e-3 + MARGIN,
             true,
         );
     }
     for file in ["none", "grasp_compliance", "grasp_slip"] {
-        check(&format!("effects/{file}.csv"), Method::Auto, 0.2e-3, false);
+        check(
+            &format!("effects/{file}.csv"),
+            Method::Auto,
+            0.08e-3 + MARGIN,
+            false,
+        );
     }
 }

@@ -139,12 +139,17 @@ fn no_effect_or_a_neutral_one_is_byte_identical_to_nominal() {
 }
 
 /// Allowed RMS difference to a shared log, in noise sigmas per channel
-/// (x, z, psi, y, fx, fz, ty). Noise-level agreement is 1 sigma; rounding
-/// amplifies the noise near quantisation steps.
+/// (x, z, psi, y, fx, fz, ty). Noise-level agreement is 1 sigma, which
+/// the READMEs state (measured: 0.965-1.053 sigma on every channel of
+/// every log but two), held to 1.1 sigma; rounding amplifies the noise
+/// near quantisation steps (sim/README.md: about 0.6 mm expected for x
+/// and z, measured 0.514 / 0.500 mm, psi 2.962 mrad); latency's torque
+/// is 1.39 sigma.
 fn tolerance(file: &str) -> [f64; 7] {
     match file {
-        "quantization.csv" => [6.0, 6.0, 4.0, 1.5, 1.5, 1.5, 1.5],
-        _ => [1.5; 7],
+        "quantization.csv" => [6.0, 6.0, 3.1, 1.1, 1.1, 1.1, 1.1],
+        "latency.csv" => [1.1, 1.1, 1.1, 1.1, 1.1, 1.1, 1.45],
+        _ => [1.1; 7],
     }
 }
 

@@ -54,9 +54,11 @@ fn noise_off_reproduces_the_independent_nominal_logs() {
             angle * 1e3
         );
         // plant.md's bar is 0.5 mm RMS; the README states 0.0004 mm and
-        // 0.0003 mrad (measured), so the test holds that figure with a
-        // margin of 2.5-3x: a change that degrades the match shows here.
-        assert!(path < 1e-6, "case {}: path RMS {path}", i + 1);
-        assert!(angle < 1e-6, "case {}: psi RMS {angle}", i + 1);
+        // 0.0003 mrad (measured: 0.000374-0.000383 mm, 0.000262-0.000271
+        // mrad; rounding to the reference's six decimals gives up to 0.00041 mm and
+        // 0.00029 mrad RMS), so the test holds that figure plus one unit
+        // of its last digit: a change that degrades the match shows here.
+        assert!(path < 0.5e-6, "case {}: path RMS {path}", i + 1);
+        assert!(angle < 0.4e-6, "case {}: psi RMS {angle}", i + 1);
     }
 }
