@@ -71,6 +71,28 @@ pub fn any_request() -> Request {
     }
 }
 
+/// Any request, its target one of three that reach each outcome of the
+/// target checks: accepted ([`MANIPULATION_TARGET`]), beyond the joint
+/// limits, not finite. For the proofs about gating, where what any target
+/// does is REQ-SM-003's proof (`verify_req_sm_003_targets_are_checked`).
+pub fn any_request_of_known_targets() -> Request {
+    match kani::any::<u8>() % 7 {
+        0 => Request::StartEstimation,
+        1 => Request::ApproveManipulation(MANIPULATION_TARGET),
+        2 => Request::ApproveManipulation(JointAngles {
+            shoulder_elevation: 1.0,
+            elbow_flexion: 3.5,
+        }),
+        3 => Request::ApproveManipulation(JointAngles {
+            shoulder_elevation: f64::NAN,
+            elbow_flexion: 0.6,
+        }),
+        4 => Request::FinishManipulation,
+        5 => Request::Stop,
+        _ => Request::Reset,
+    }
+}
+
 /// Upper-arm length l1 of the fixed arm [m].
 pub const UPPER_ARM: f64 = 0.30;
 /// Forearm length l2 of the fixed arm [m].

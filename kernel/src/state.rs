@@ -463,6 +463,16 @@ impl Validated {
         joints: &JointLimitMonitor,
         workspace: &WorkspaceMonitor,
     ) -> Result<ManipulationPlan, TargetError> {
+        if !target.is_finite() {
+            // Refused before the kinematics, as the joint-limit monitor
+            // refuses the non-finite goal such a target has (q1 + q2 of two
+            // opposite infinities would make a NaN on the way).
+            return Err(TargetError::JointLimits(Violation::new(
+                crate::monitor::Limit::ModelMismatch,
+                f64::NAN,
+                joints.max_model_mismatch,
+            )));
+        }
         let geometry = self.arm.geometry();
         let goal = geometry.forward(target);
         joints
@@ -779,10 +789,10 @@ mod verification {
 
     /// REQ-SM-003: for any target a manipulation plan exists only for
     /// finite targets whose goal passes the joint-limit and workspace
-    /// checks, and it moves from the hold pose. Unwind 17: the validator
-    /// that makes the fixed arm checks 16 values for finiteness.
+    /// checks, and it moves from the hold pose. Unwind 22: the validator
+    /// that makes the fixed arm checks 21 values for finiteness.
     #[cfg_attr(kani, kani::proof)]
-    #[cfg_attr(kani, kani::unwind(17))]
+    #[cfg_attr(kani, kani::unwind(22))]
     #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
     #[cfg_attr(kani, kani::stub(libm::atan2, crate::kani_stubs::stub::atan2))]
     #[cfg_attr(kani, kani::stub(libm::sin, crate::kani_stubs::stub::sin))]

@@ -8,8 +8,9 @@
 //! * a `req_*` test or `verify_req_*` harness (tests and the kernel's
 //!   sources) is named by no requirement, or mentions an ID that does not
 //!   exist;
-//! * the record of harnesses real Kani has verified names a harness that is
-//!   not cited;
+//! * the record of real Kani's runs (`[[kani.run]]`) names a harness that
+//!   is not cited, misses a cited harness, names one twice or gives a
+//!   result other than `verified`, `timeout` or `failed`;
 //! * a requirement cites an unknown hazard, or a hazard has no requirement;
 //! * `spec/traceability.md` is not the table this test generates (run with
 //!   `LIMB_BLESS=1` to rewrite it).
@@ -24,11 +25,30 @@ struct Spec {
     requirement: Vec<Requirement>,
 }
 
-/// What real Kani has said about the harnesses.
+/// What real Kani has said about the harnesses: one run per cited harness.
 #[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
 struct KaniRecord {
     version: String,
-    verified: Vec<String>,
+    cbmc: String,
+    date: String,
+    machine: String,
+    run: Vec<KaniRun>,
+}
+
+/// One harness's latest run under real Kani (`verification/kani-run.sh`).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct KaniRun {
+    harness: String,
+    /// `verified` (every check and every cover), `timeout` or `failed`.
+    result: String,
+    /// Wall time [s].
+    seconds: u32,
+    /// Peak resident memory [MiB].
+    mib: u32,
+    /// Covers satisfied / covers.
+    covers: String,
 }
 
 #[derive(Deserialize)]
@@ -176,17 +196,35 @@ fn table(spec: &Spec) -> String {
          under stated libm stubs (under `cargo test` only sampled by the stand-in), `proptest` = \
          a property over generated inputs, `both` = the two, `tests` = fixed cases and sessions \
          only (fixed-case tests may be cited beside any engine).\n\n\
-         Real Kani ({}): {}.\n\n\
+         Real Kani {} with CBMC {} ({}; {}; `verification/kani-run.sh`): {} of {} harnesses \
+         verified, each with every cover satisfied; each `kani:` check below says its result, \
+         wall time and peak memory.\n\n\
          | requirement | title | hazards | engines | verified by |\n|---|---|---|---|---|\n",
         spec.kani.version,
-        if spec.kani.verified.is_empty() {
-            "no harness of this table has been reported verified yet".to_string()
-        } else {
-            format!("verified {}", spec.kani.verified.join(", "))
-        }
+        spec.kani.cbmc,
+        spec.kani.date,
+        spec.kani.machine,
+        spec.kani.run.iter().filter(|r| r.result == "verified").count(),
+        spec.kani.run.len(),
     );
     for r in &spec.requirement {
-        let checks: Vec<String> = r.verified_by.iter().map(|v| format!("`{v}`")).collect();
+        let checks: Vec<String> = r
+            .verified_by
+            .iter()
+            .map(|v| {
+                let run = v
+                    .strip_prefix("kani:")
+                    .and_then(|rest| rest.split_once("::"))
+                    .and_then(|(_, name)| spec.kani.run.iter().find(|run| run.harness == name));
+                match run {
+                    Some(run) => format!(
+                        "`{v}` ({}, {} s, {} MiB, covers {})",
+                        run.result, run.seconds, run.mib, run.covers
+                    ),
+                    None => format!("`{v}`"),
+                }
+            })
+            .collect();
         out.push_str(&format!(
             "| {} | {} | {} | {} | {} |\n",
             r.id,
@@ -260,9 +298,31 @@ fn every_requirement_is_verified_and_every_check_traces_to_one() {
             failures.push(format!("{file}::{name}: no requirement"));
         }
     }
-    for harness in &spec.kani.verified {
-        if !referenced.keys().any(|(_, name)| name == harness) {
-            failures.push(format!("kani.verified: {harness} is not a cited harness"));
+    let mut runs = BTreeMap::new();
+    for run in &spec.kani.run {
+        if !referenced.keys().any(|(_, name)| *name == run.harness) {
+            failures.push(format!("kani.run: {} is not a cited harness", run.harness));
+        }
+        if !matches!(run.result.as_str(), "verified" | "timeout" | "failed") {
+            failures.push(format!("kani.run: {}: result {}", run.harness, run.result));
+        }
+        if runs.insert(run.harness.as_str(), run).is_some() {
+            failures.push(format!("kani.run: {} twice", run.harness));
+        }
+    }
+    let cited_harnesses: BTreeSet<&str> = spec
+        .requirement
+        .iter()
+        .flat_map(|r| &r.verified_by)
+        .filter_map(|v| {
+            v.strip_prefix("kani:")?
+                .split_once("::")
+                .map(|(_, name)| name)
+        })
+        .collect();
+    for name in cited_harnesses {
+        if !runs.contains_key(name) {
+            failures.push(format!("kani.run: no run of {name}"));
         }
     }
     let generated = table(&spec);

@@ -16,7 +16,9 @@
 //! psi more than [`OUTLIER_PSI`] from their median psi. With at most two
 //! outliers among the five, the medians stay on the path. A sample
 //! without two recorded neighbours on each side (the first and last two of
-//! a path) is never judged an outlier. A stretch of several corrupted
+//! a path) is never judged an outlier; one with them whose pose is not
+//! finite (NaN, ±∞: never recorded by the kernel, whose watchdog refuses
+//! such frames, but possible in a path read from a log) always is. A stretch of several corrupted
 //! samples in a row is not isolated: the robust (Cauchy-weighted) fits
 //! handle those.
 //!
@@ -41,8 +43,9 @@ pub const OUTLIER_DISTANCE: f64 = 5.0e-3;
 /// an outlier [rad]: 50 × the psi noise of `plant.md` (1 mrad).
 pub const OUTLIER_PSI: f64 = 0.05;
 
-/// True when `path[index]` is an isolated outlier (module doc); false for
-/// an index without [`OUTLIER_REACH`] samples on each side.
+/// True when `path[index]` is an isolated outlier (module doc) or, with a
+/// full window, not finite; false for an index without [`OUTLIER_REACH`]
+/// samples on each side.
 pub fn is_isolated_outlier(path: &[PathSample], index: usize) -> bool {
     // Checked both ways: an index near `usize::MAX` has no window either.
     let Some(window) = index
@@ -54,6 +57,14 @@ pub fn is_isolated_outlier(path: &[PathSample], index: usize) -> bool {
     let Some(sample) = path.get(index) else {
         return false;
     };
+    // A sample off every finite path (NaN or an infinity, which the
+    // kernel's watchdog never records but a path read from a log may hold)
+    // is an outlier: it is left out of the fits. Judged here, so that the
+    // differences below are of a finite sample and a median and never
+    // make a NaN (∞ − ∞); finite samples are judged as before.
+    if !sample.pose.is_finite() {
+        return true;
+    }
     let median = |of: fn(&PathSample) -> f64| {
         let mut values = [0.0; OUTLIER_WINDOW];
         for (value, sample) in values.iter_mut().zip(window) {
@@ -210,8 +221,9 @@ mod verification {
     }
 
     /// REQ-EST-005: for any path of up to [`SAMPLES`] frames (any numbers,
-    /// NaN included) and any index, the outlier test returns without a
-    /// panic and judges only samples with a full window. Unwind 7: the
+    /// NaN and infinities included) and any index, the outlier test returns
+    /// without a panic and without making a NaN, judges only samples with
+    /// a full window, and judges a non-finite one an outlier. Unwind 7: the
     /// longest loops are the sort and the copy of the five-sample window.
     #[cfg_attr(kani, kani::proof)]
     #[cfg_attr(kani, kani::unwind(7))]
@@ -227,9 +239,13 @@ mod verification {
         let path = &path[..len];
         let outlier = is_isolated_outlier(path, index);
         assert_eq!(check_verdict(len, index, outlier), Ok(()));
+        let judged = index >= OUTLIER_REACH && index + OUTLIER_REACH < len;
+        if judged && !path[index].pose.is_finite() {
+            assert!(outlier, "a non-finite judged sample was kept");
+        }
         kani::cover!(outlier, "outlier test: an outlier");
         kani::cover!(
-            !outlier && index >= OUTLIER_REACH && index + OUTLIER_REACH < len,
+            !outlier && judged,
             "outlier test: a judged sample that is not one"
         );
         kani::cover!(index >= len, "outlier test: an index beyond the path");

@@ -99,10 +99,10 @@ mod verification {
     /// what it tripped on. That it trips exactly outside the joint ranges is
     /// numerical (inverse kinematics through atan2): the proptest property
     /// `arbitrary_sessions_keep_every_safety_property` checks it against an
-    /// independent model. Unwind 17: the validator that makes the fixed
-    /// arm checks 16 values for finiteness.
+    /// independent model. Unwind 22: the validator that makes the fixed
+    /// arm checks 21 values for finiteness.
     #[cfg_attr(kani, kani::proof)]
-    #[cfg_attr(kani, kani::unwind(17))]
+    #[cfg_attr(kani, kani::unwind(22))]
     #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
     #[cfg_attr(kani, kani::stub(libm::atan2, crate::kani_stubs::stub::atan2))]
     #[cfg_attr(kani, kani::stub(libm::sin, crate::kani_stubs::stub::sin))]

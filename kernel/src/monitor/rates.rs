@@ -15,11 +15,13 @@ use heapless::Deque;
 /// Frames kept for the window; at 1 kHz this covers 127 ms.
 pub const RATE_WINDOW_CAPACITY: usize = 128;
 
-/// Sliding window of recent frames.
+/// Sliding window of recent frames, at most `N` of them (the kernel's:
+/// [`RATE_WINDOW_CAPACITY`]; the proof uses a small `N` so that the full
+/// window's branch is reached in a few pushes).
 #[derive(Clone, Debug)]
-pub struct RateWindow {
+pub struct RateWindow<const N: usize = RATE_WINDOW_CAPACITY> {
     window: f64,
-    frames: Deque<PathSample, RATE_WINDOW_CAPACITY>,
+    frames: Deque<PathSample, N>,
 }
 
 /// Rates over the window.
@@ -38,7 +40,7 @@ impl Rates {
     }
 }
 
-impl RateWindow {
+impl<const N: usize> RateWindow<N> {
     /// An empty window of `window` seconds.
     pub fn new(window: f64) -> Self {
         Self {
@@ -83,20 +85,29 @@ impl RateWindow {
     /// until the frames span the whole window (the first `window` seconds
     /// after a start or reset, when a rate over a shorter span would be
     /// mostly noise: 0.5 N of force noise over 1 ms reads as 700 N/s).
+    ///
+    /// Differences that overflow (frames near `f64::MAX` apart, which no
+    /// sensor gives) read as infinitely fast, so that the monitors stop;
+    /// no NaN is made (∞ / ∞).
     pub fn rates(&self) -> Rates {
         match (self.frames.front(), self.frames.back()) {
             (Some(old), Some(new)) if new.time - old.time >= self.window => {
                 let dt = new.time - old.time;
+                let moved = [
+                    new.pose.x - old.pose.x,
+                    new.pose.z - old.pose.z,
+                    new.pose.psi - old.pose.psi,
+                    libm::hypot(new.wrench.fx - old.wrench.fx, new.wrench.fz - old.wrench.fz),
+                ];
+                if !(dt.is_finite() && moved.iter().all(|d| d.is_finite())) {
+                    return Rates {
+                        velocity: PoseRate::new(f64::INFINITY, f64::INFINITY, f64::INFINITY),
+                        force_rate: f64::INFINITY,
+                    };
+                }
                 Rates {
-                    velocity: PoseRate::new(
-                        (new.pose.x - old.pose.x) / dt,
-                        (new.pose.z - old.pose.z) / dt,
-                        (new.pose.psi - old.pose.psi) / dt,
-                    ),
-                    force_rate: libm::hypot(
-                        new.wrench.fx - old.wrench.fx,
-                        new.wrench.fz - old.wrench.fz,
-                    ) / dt,
+                    velocity: PoseRate::new(moved[0] / dt, moved[1] / dt, moved[2] / dt),
+                    force_rate: moved[3] / dt,
                 }
             }
             _ => Rates::default(),
@@ -113,7 +124,7 @@ mod tests {
     /// 50 ms window: each rate is the velocity itself, not a difference.
     #[test]
     fn the_rates_of_a_uniform_motion_are_its_velocity() {
-        let mut window = RateWindow::new(0.05);
+        let mut window: RateWindow = RateWindow::new(0.05);
         for k in 0..=12 {
             let t = f64::from(k) * 0.01;
             window.push(PathSample {
@@ -145,14 +156,19 @@ mod verification {
     #[cfg(not(kani))]
     use limb_kani_stand_in as kani;
 
-    /// Frames pushed by the harness: three are enough to drop a frame from
-    /// the front (the front invariant) and to span or not span the window.
-    const PUSHES: usize = 3;
+    /// The proof's window capacity: the push logic does not depend on it,
+    /// and with 3 the full window's branch is reached in 4 pushes.
+    const CAPACITY: usize = 3;
+
+    /// Frames pushed by the harness: one more than [`CAPACITY`], so that
+    /// the window can be full and drop a frame for room, and enough to
+    /// drop one from the front by age and to span or not span the window.
+    const PUSHES: usize = CAPACITY + 1;
 
     /// REQ-MON-002, REQ-MON-003: after any push the window holds at most
     /// its capacity, at most one frame at least `window` older than the
     /// newest (the front), and reports zero rates until it spans `window`.
-    pub fn check_window(window: &RateWindow) -> Result<(), &'static str> {
+    pub fn check_window<const N: usize>(window: &RateWindow<N>) -> Result<(), &'static str> {
         let (Some(front), Some(back)) = (window.frames.front(), window.frames.back()) else {
             return if window.rates() == Rates::default() {
                 Ok(())
@@ -160,7 +176,7 @@ mod verification {
                 Err("an empty window reports a rate")
             };
         };
-        if window.frames.len() > RATE_WINDOW_CAPACITY {
+        if window.frames.len() > N {
             return Err("the window outgrew its capacity");
         }
         if window
@@ -178,15 +194,18 @@ mod verification {
     }
 
     /// REQ-MON-002, REQ-MON-003: pushing finite frames in time order (what
-    /// the kernel pushes) keeps the window's invariants for any frames.
-    /// Unwind 4: the harness pushes 3 frames and `push` pops at most the
-    /// 2 older ones.
+    /// the kernel pushes) keeps the window's invariants for any frames, in
+    /// a window of [`CAPACITY`] frames (the kernel's has
+    /// [`RATE_WINDOW_CAPACITY`]; the code is the same for any capacity).
+    /// Unwind 5: the harness pushes 4 frames and `push` pops at most the
+    /// 3 older ones.
     #[cfg_attr(kani, kani::proof)]
-    #[cfg_attr(kani, kani::unwind(4))]
+    #[cfg_attr(kani, kani::unwind(5))]
     #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
     pub fn verify_req_mon_002_rate_window_spans_its_window() {
-        let mut window = RateWindow::new(SafetyLimits::default().rate_window);
+        let mut window = RateWindow::<CAPACITY>::new(SafetyLimits::default().rate_window);
         let mut last = f64::NEG_INFINITY;
+        let mut dropped_for_room = false;
         for _ in 0..PUSHES {
             let frame = if kani::any::<u8>() < 64 {
                 any_frame()
@@ -206,14 +225,20 @@ mod verification {
                     && frame.wrench.is_finite()
                     && frame.time > last,
             );
+            let full = window.frames.is_full();
             window.push(frame);
+            dropped_for_room |= full;
             last = frame.time;
             assert_eq!(check_window(&window), Ok(()));
         }
         let spans = window.rates() != Rates::default();
         kani::cover!(spans, "rate window: spans the window");
         kani::cover!(!spans, "rate window: not yet");
-        kani::cover!(window.frames.len() < PUSHES, "rate window: dropped a frame");
+        kani::cover!(dropped_for_room, "rate window: full, dropped the oldest");
+        kani::cover!(
+            window.frames.len() < CAPACITY,
+            "rate window: dropped by age"
+        );
     }
 
     #[cfg(test)]

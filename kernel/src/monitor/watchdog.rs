@@ -74,14 +74,17 @@ mod verification {
         previous_now: Option<f64>,
         verdict: Verdict,
     ) -> Result<(), &'static str> {
-        let age = now - frame.time;
+        // The age only of a finite clock and stamp: `now − time` of two
+        // equal infinities would make a NaN in the check itself (Kani's NaN
+        // check found it there, not in the watchdog, which subtracts only
+        // after its finiteness test).
         let fresh = now.is_finite()
             && previous_now.is_none_or(|p| now >= p)
             && frame.time.is_finite()
             && frame.pose.is_finite()
             && frame.wrench.is_finite()
             && previous.is_none_or(|p| frame.time >= p)
-            && (0.0..=max_age).contains(&age);
+            && (0.0..=max_age).contains(&(now - frame.time));
         match verdict {
             Ok(()) if fresh => Ok(()),
             Ok(()) => Err("the watchdog passed a faulty frame or clock"),
