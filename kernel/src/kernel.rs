@@ -864,9 +864,9 @@ mod verification {
     }
 
     /// REQ-PANIC-001, REQ-CMD-001, REQ-MON-006, REQ-MON-007: one step from
-    /// Grasp with any frame (at the step's clock or a
-    /// non-finite one) never panics, commands within the
-    /// limits and stops on any fault in the same step.
+    /// Grasp with any frame (at the step's clock or a non-finite one)
+    /// never panics, commands within the limits and stops on any fault in
+    /// the same step.
     #[cfg_attr(kani, kani::proof)]
     #[cfg_attr(kani, kani::unwind(12))]
     #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
@@ -910,8 +910,8 @@ mod verification {
 
     /// REQ-PANIC-001, REQ-CMD-001, REQ-MON-006, REQ-MON-007: one step in
     /// Validated with any frame (at the step's clock or a non-finite one)
-    /// never panics, commands within the
-    /// limits and stops on any fault in the same step.
+    /// never panics, commands within the limits and stops on any fault in
+    /// the same step.
     #[cfg_attr(kani, kani::proof)]
     #[cfg_attr(kani, kani::unwind(22))]
     #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
@@ -934,8 +934,8 @@ mod verification {
 
     /// REQ-PANIC-001, REQ-CMD-001, REQ-MON-006, REQ-MON-007, REQ-MON-012:
     /// one step while manipulating with any frame (at the step's clock or a
-    /// non-finite one) never panics, commands within
-    /// the limits and stops on any fault in the same step.
+    /// non-finite one) never panics, commands within the limits and stops
+    /// on any fault in the same step.
     #[cfg_attr(kani, kani::proof)]
     #[cfg_attr(kani, kani::unwind(22))]
     #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]

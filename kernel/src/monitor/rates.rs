@@ -120,6 +120,25 @@ mod tests {
     use super::*;
     use crate::geometry::{Pose, Wrench};
 
+    /// REQ-MON-002, REQ-MON-003: frames whose differences overflow (times,
+    /// poses and forces near f64::MAX apart: ∞ / ∞) read as infinitely
+    /// fast, never NaN, so that the speed and force-rate monitors stop.
+    #[test]
+    fn req_mon_002_overflowing_differences_read_as_infinitely_fast() {
+        let mut window: RateWindow = RateWindow::new(0.05);
+        for (time, value) in [(-f64::MAX, -f64::MAX), (f64::MAX, f64::MAX)] {
+            window.push(PathSample {
+                time,
+                pose: Pose::new(value, value, value),
+                wrench: Wrench::new(value, value, 0.0),
+            });
+        }
+        let rates = window.rates();
+        assert_eq!(rates.speed(), f64::INFINITY, "{rates:?}");
+        assert_eq!(rates.force_rate, f64::INFINITY, "{rates:?}");
+        assert_eq!(rates.velocity.psi, f64::INFINITY, "{rates:?}");
+    }
+
     /// A grasp moving at a constant velocity, read every 10 ms through a
     /// 50 ms window: each rate is the velocity itself, not a difference.
     #[test]
