@@ -16,8 +16,10 @@
 //!      │ a limit │ planned lift and its extension (0.1 m on along the same
 //!      │ line, for long arms) complete
 //!      ▼
-//!   Settling (a minimum-jerk move to the holding pose x − f_ext/K at
-//!      │      hold_speed / hold_rate, then held for settle_time; recording)
+//!   Settling (a minimum-jerk move to the holding pose x − f_ext/K, drawn
+//!      │      back towards x where the joint envelope would leave the
+//!      │      margin there, at hold_speed / hold_rate, then held for
+//!      │      settle_time; recording)
 //!      ▼
 //!   Concluding (held still; the refinement runs SAMPLES_PER_STEP per step)
 //! ```
@@ -278,7 +280,7 @@ impl ShapedLift {
                 }
                 match reason {
                     Some(reason) => {
-                        let hold = holding_pose(frame, &config.impedance.stiffness);
+                        let hold = lift_hold(frame, online, config);
                         let to_hold = MinimumJerkMove::bounded(
                             set_point.pose,
                             hold,
@@ -383,6 +385,77 @@ pub(crate) fn holding_pose(frame: &PathSample, stiffness: &[f64; 3]) -> Pose {
     )
 }
 
+/// Halvings of the line from the measured pose to the holding pose that
+/// [`lift_hold`] may take: the hold is found to 1/64 of that line (about
+/// 1 mm and 0.01 rad for the lift's 5-7 cm, 0.3-0.5 rad stretch), at six
+/// joint envelopes' cost once per lift.
+pub const HOLD_HALVINGS: usize = 6;
+
+/// The lift's holding pose [world frame; m, rad]: the [`holding_pose`]
+/// that carries the arm as the robot carried it at the lift's end, unless
+/// the provisional model's joint envelope there leaves less slack to the
+/// joint limits ([`joint_slack`]) than the margin and than the measured
+/// pose leaves; then the point nearest it on the line from the measured
+/// pose that does, to 1/2^[`HOLD_HALVINGS`] of the line.
+///
+/// Why: at the lift's end the wrench still holds the lift's dynamic part
+/// (the set-point leads the arm, and psi's lags it by up to 0.5 rad), so
+/// the pose that carries it may lie beyond what the arm can reach with
+/// its elbow inside its range: a short arm (l1 0.223 m, l2 0.158 m) held
+/// there was pulled straight and on into hyperextension while the
+/// estimate was refined (`limb population --arms 500 --seed 2026`, arm
+/// 121). Without a provisional forearm there is no envelope to judge by,
+/// and the carrying pose is held.
+pub fn lift_hold(frame: &PathSample, online: &OnlineEstimator, config: &KernelConfig) -> Pose {
+    let carried = holding_pose(frame, &config.impedance.stiffness);
+    let slack = |pose: Pose| {
+        online
+            .joint_envelope(pose, &config.validation)
+            .map(|envelope| joint_slack(envelope, &config.lift_shaping, &config.limits))
+            .map(|(elbow, shoulder)| elbow.min(shoulder))
+    };
+    let Some(measured) = slack(frame.pose) else {
+        return carried;
+    };
+    let floor = measured.min(0.0);
+    let acceptable = |pose: Pose| slack(pose).is_some_and(|s| s >= floor);
+    if acceptable(carried) {
+        return carried;
+    }
+    let at = |t: f64| {
+        let from = frame.pose;
+        Pose::new(
+            from.x + t * (carried.x - from.x),
+            from.z + t * (carried.z - from.z),
+            from.psi + t * (carried.psi - from.psi),
+        )
+    };
+    let (mut good, mut bad) = (0.0, 1.0);
+    for _ in 0..HOLD_HALVINGS {
+        let mid = 0.5 * (good + bad);
+        if acceptable(at(mid)) {
+            good = mid;
+        } else {
+            bad = mid;
+        }
+    }
+    at(good)
+}
+
+/// Slack of a joint envelope to the joint limits less the lift's margin
+/// [rad]: (elbow flexion above its low limit + margin, shoulder elevation
+/// below its high limit − margin); ≤ 0 is inside the margin.
+pub fn joint_slack(
+    envelope: JointEnvelope,
+    shaping: &LiftShaping,
+    limits: &SafetyLimits,
+) -> (f64, f64) {
+    (
+        envelope.min_elbow_flexion - (limits.elbow_flexion.low + shaping.joint_margin),
+        limits.shoulder_elevation.high - shaping.joint_margin - envelope.max_shoulder_elevation,
+    )
+}
+
 /// Why the lift must end now, if it must.
 fn end_reason(
     online: &OnlineEstimator,
@@ -391,11 +464,11 @@ fn end_reason(
     limits: &SafetyLimits,
 ) -> Option<LiftEnd> {
     if let Some(envelope) = envelope {
-        if envelope.min_elbow_flexion <= limits.elbow_flexion.low + shaping.joint_margin {
+        let (elbow, shoulder) = joint_slack(envelope, shaping, limits);
+        if elbow <= 0.0 {
             return Some(LiftEnd::JointMargin(Limit::ElbowFlexion));
         }
-        if envelope.max_shoulder_elevation >= limits.shoulder_elevation.high - shaping.joint_margin
-        {
+        if shoulder <= 0.0 {
             return Some(LiftEnd::JointMargin(Limit::ShoulderElevation));
         }
     }
