@@ -79,7 +79,7 @@ pub fn run(log: &Path, method: MethodArg, arm: ArmModel, json: bool) -> Result<(
     }
     let limits = arm.apply(KernelConfig::default()).validation;
     let estimated = match method {
-        MethodArg::Online => estimate_online(&path, limits.shoulder_rhythm),
+        MethodArg::Online => estimate_online(&path, &limits),
         _ => estimate_arm(&path, method.into()),
     };
     let estimate = estimated.map_err(|error| {

@@ -125,10 +125,10 @@ fn an_emergency_stop_mid_lift_holds_the_musculoskeletal_arm() {
 /// `person` arm (`limb population --plant myoarm --subjects all`; README
 /// "A person's arm"): at least 80 % of the non-spastic subjects validated
 /// with l1 and l2 within 5 mm of the anatomy (measured at this noise seed,
-/// 2026, 9 of 10: l1 within 1.8 mm, l2 within 2.5 mm, the shoulder at rest
-/// within 3.9 mm; the tenth, `cast`, stopped by the force monitor), no
+/// 2026, 9 of 10: l1 within 1.6 mm, l2 within 2.5 mm, the shoulder at rest
+/// within 3.7 mm; the tenth, `cast`, stopped by the force monitor), no
 /// subject validated more than 10 mm off, every validated one within the
-/// README's figures (l1 2.0 mm, l2 2.6 mm, shoulder 4.1 mm at seed 4711)
+/// README's figures (l1 1.8 mm, l2 2.6 mm, shoulder 3.9 mm at seed 4711)
 /// with a margin (2.5, 3.0, 5.0 mm), no joint past its default limit, and
 /// every spastic subject validated within 5 mm or stopped with a named
 /// cause.

@@ -372,7 +372,7 @@ impl Estimate {
     ) -> Result<EstimateStep, StopReason> {
         if self.lift.is_recording() && is_due(path.last(), frame.time) {
             path.push(*frame).map_err(|_| StopReason::PathBufferFull)?;
-            self.online.record(path);
+            self.online.record(path, &config.validation);
         }
         if let Some((hold, reason)) = self.lift.settled(now, config.lift_shaping.settle_time) {
             let refinement = self

@@ -203,7 +203,7 @@ fn auto_is_never_worse_than_kasa_and_corrects_compliance_and_slip() {
 fn online_estimate_is_accurate_on_the_six_noisy_logs() {
     for case in 1..=6 {
         let log = logs::read(&format!("noisy/case{case}.csv"));
-        let estimate = estimate_online(&log.path, [0.0, 0.0]).expect("estimate");
+        let estimate = estimate_online(&log.path, &ValidationLimits::default()).expect("estimate");
         let errors = noisy_errors(case, "online", &estimate, &log);
         assert_within(
             errors,
@@ -222,7 +222,7 @@ fn req_time_002_the_refinement_runs_in_bounded_slices() {
     let log = logs::read("noisy/case3.csv");
     let mut online = OnlineEstimator::new();
     for end in 1..=log.path.len() {
-        online.record(&log.path[..end]);
+        online.record(&log.path[..end], &ValidationLimits::default());
     }
     let (lift, split) = online.split();
     let forearm = split - lift;
@@ -277,7 +277,7 @@ fn one_non_finite_number_in_a_good_path_is_refused_by_name() {
 fn replay_online(path: &[PathSample], mut each: impl FnMut(usize, &OnlineEstimator)) {
     let mut online = OnlineEstimator::new();
     for end in 1..=path.len() {
-        online.record(&path[..end]);
+        online.record(&path[..end], &ValidationLimits::default());
         each(end - 1, &online);
     }
 }
@@ -307,7 +307,7 @@ fn the_online_split_and_forearm_arc_follow_their_definitions() {
                 let mut spoiled = log.path[..=index].to_vec();
                 spoiled[index].pose.x = f64::NAN;
                 let mut skipped = previous;
-                skipped.record(&spoiled);
+                skipped.record(&spoiled, &ValidationLimits::default());
                 assert_eq!(skipped, previous, "case {case}: a NaN pose was recorded");
             }
             previous = *online;
@@ -431,7 +431,7 @@ fn the_batch_and_online_splits_agree() {
         let batch = detect_phases(&log.path, &PointModel::GRASP).expect("phases");
         let mut online = OnlineEstimator::new();
         for end in 1..=log.path.len() {
-            online.record(&log.path[..end]);
+            online.record(&log.path[..end], &ValidationLimits::default());
         }
         let (lift, split) = online.split();
         assert_eq!(batch.forearm.start, lift, "case {case}");

@@ -931,7 +931,7 @@ proptest! {
         let q1_rest = -(height / l1).asin();
         let shoulder = Point::new(l2 + l1 * q1_rest.cos(), 0.02 - l1 * q1_rest.sin());
         prop_assert!((shoulder.z - 0.02 - height).abs() < 1e-12);
-        let e = limb_kernel::estimation::estimate_online(&path, [along, rise]).unwrap();
+        let e = limb_kernel::estimation::estimate_online(&path, &ValidationLimits { shoulder_rhythm: [along, rise], ..ValidationLimits::default() }).unwrap();
         prop_assert!((e.grasp_pitch_offset - offset).abs() < 1e-6, "{e:?}");
         prop_assert!((e.forearm_length - l2).abs() < 1e-6, "{e:?}");
         prop_assert!((e.upper_arm_length - l1).abs() < 2e-4, "{} {l1}", e.upper_arm_length);
@@ -944,7 +944,7 @@ proptest! {
             ..ValidationLimits::person()
         };
         prop_assert!(validate(&e, path[0].pose.point(), &limits).is_ok());
-        let fixed = limb_kernel::estimation::estimate_online(&path, [0.0, 0.0]).unwrap();
+        let fixed = limb_kernel::estimation::estimate_online(&path, &ValidationLimits::default()).unwrap();
         let reach = 0.8 * along.hypot(rise);
         prop_assert!(fixed.shoulder.distance(shoulder) > 0.3 * reach, "{fixed:?}");
     }

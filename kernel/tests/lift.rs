@@ -43,7 +43,7 @@ fn replay_path(path: &[PathSample], config: &KernelConfig, each: &mut Each) {
     let mut online = OnlineEstimator::new();
     for end in 1..=path.len() {
         let frame = path[end - 1];
-        online.record(&path[..end]);
+        online.record(&path[..end], &config.validation);
         let command = lift
             .advance(frame.time, &frame, &online, config)
             .unwrap_or_else(|e| panic!("at {} s: {e:?}", frame.time));

@@ -47,6 +47,7 @@ pub use phase::{detect_phases, detect_phases_from, Phases, DEPARTURE_WINDOW, LIF
 
 use crate::geometry::Point;
 use crate::path::{PathSample, PATH_CAPACITY};
+use crate::validate::ValidationLimits;
 use core::ops::Range;
 
 /// Which estimator to use.
@@ -315,7 +316,7 @@ pub fn estimate_arm(path: &[PathSample], method: Method) -> Result<ArmEstimate, 
         return Err(EstimateError::NonFiniteSample);
     }
     let (phases, fits, method_disagreement) = match method {
-        Method::Online => return estimate_online(path, [0.0, 0.0]),
+        Method::Online => return estimate_online(path, &ValidationLimits::default()),
         Method::Ls => {
             let phases = detect_phases(path, &PointModel::GRASP)?;
             let fits = fit_ls(path, &phases, PointModel::GRASP)?;
@@ -479,18 +480,20 @@ fn fit_robust(path: &[PathSample]) -> Result<(Phases, PhaseFits), EstimateError>
 /// # Errors
 /// No lift-off or no split ([`EstimateError::ForearmPhaseTooShort`],
 /// [`EstimateError::UpperArmPhaseTooShort`]), or a failed fit.
-/// `rhythm` is the shoulder-rhythm prior [m/rad]
-/// (`ValidationLimits::shoulder_rhythm`; `estimate_arm` uses none).
+/// `prior` gives the shoulder-rhythm prior [m/rad]
+/// (`ValidationLimits::shoulder_rhythm`; `estimate_arm` uses the default
+/// limits, whose rhythm is none) and the plausible forearm range of the
+/// provisional forearm.
 pub fn estimate_online(
     path: &[PathSample],
-    rhythm: [f64; 2],
+    prior: &ValidationLimits,
 ) -> Result<ArmEstimate, EstimateError> {
     let mut online = online::OnlineEstimator::new();
     for end in 1..=path.len().min(PATH_CAPACITY) {
-        online.record(path.get(..end).unwrap_or(&[]));
+        online.record(path.get(..end).unwrap_or(&[]), prior);
     }
     let mut refinement = online
-        .refinement(path.len(), rhythm)
+        .refinement(path.len(), prior.shoulder_rhythm)
         .ok_or(EstimateError::UpperArmPhaseTooShort)?;
     // Each call ends at least one pass: 3 ITERATIONS + 3 passes in all.
     for _ in 0..3 * refine::ITERATIONS + 4 {

@@ -12,7 +12,8 @@
 //!    out ([`super::outlier`]): an unweighted fit over a short arc follows
 //!    them out of all proportion. Once the forearm has swept
 //!    [`PROVISIONAL_ARC`] the moments give a provisional forearm (l2, resting
-//!    elbow, 1σ uncertainties). A sample whose radial residual exceeds the
+//!    elbow, 1σ uncertainties), if its radius lies in the prior's forearm
+//!    range (`ValidationLimits`; a few quantized points fit any circle). A sample whose radial residual exceeds the
 //!    departure tolerance is flagged; when [`DEPARTURE_PERCENT`] % of the
 //!    last [`DEPARTURE_WINDOW`] samples are flagged the grasp has left the
 //!    circle for good (the elbow has lifted), and the forearm phase ends
@@ -184,8 +185,10 @@ impl OnlineEstimator {
         (self.max_psi - self.lift_psi, self.upper_arm_arc)
     }
 
-    /// Updates the estimation with the last sample of `path`.
-    pub fn record(&mut self, path: &[PathSample]) {
+    /// Updates the estimation with the last sample of `path`; `prior`'s
+    /// forearm range bounds the provisional forearm (a fit outside it is
+    /// none yet).
+    pub fn record(&mut self, path: &[PathSample], prior: &ValidationLimits) {
         let Some((index, sample)) = path.len().checked_sub(1).zip(path.last()) else {
             return;
         };
@@ -203,12 +206,18 @@ impl OnlineEstimator {
                     self.forearm_added = index;
                 }
             }
-            OnlinePhase::Forearm => self.record_forearm(path, index, sample),
+            OnlinePhase::Forearm => self.record_forearm(path, index, sample, prior),
             OnlinePhase::UpperArm => self.catch_up(path, index),
         }
     }
 
-    fn record_forearm(&mut self, path: &[PathSample], index: usize, sample: &PathSample) {
+    fn record_forearm(
+        &mut self,
+        path: &[PathSample],
+        index: usize,
+        sample: &PathSample,
+        prior: &ValidationLimits,
+    ) {
         self.max_psi = self.max_psi.max(sample.pose.psi);
         // The moments lag the newest sample by the departure window.
         if self.forearm_added + DEPARTURE_WINDOW <= index {
@@ -221,7 +230,19 @@ impl OnlineEstimator {
         }
         let swept = self.max_psi - self.lift_psi >= PROVISIONAL_ARC;
         if swept && self.forearm_moments.count() >= PROVISIONAL_SAMPLES {
-            if let Ok(fit) = self.forearm_moments.fit() {
+            // A forearm outside the plausible range is no provisional
+            // forearm yet: the set-point stays within the prior reach, and
+            // no joint envelope is built on it. Seen: 18 distinct points
+            // of a sensor quantized at 4 mm fit a 0.06 m circle to a
+            // 0.19 m forearm, whose envelope read the elbow at −0.62 rad
+            // while it stood at +0.36 rad, and the monitor stopped.
+            let plausible = prior.min_forearm_length..=prior.max_forearm_length;
+            if let Some(fit) = self
+                .forearm_moments
+                .fit()
+                .ok()
+                .filter(|fit| plausible.contains(&fit.circle.radius))
+            {
                 self.forearm = Some(fit);
                 if let Some(rest) = self.rest {
                     self.pitch_offset = pitch_offset_at(rest, fit.circle.centre);
@@ -357,4 +378,54 @@ pub fn angle_between(centre: Point, a: Point, b: Point) -> f64 {
     let (ax, az) = (a.x - centre.x, a.z - centre.z);
     let (bx, bz) = (b.x - centre.x, b.z - centre.z);
     libm::fabs(libm::atan2(ax * bz - az * bx, ax * bx + az * bz))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::Wrench;
+
+    /// A forearm of `radius` turning from rest about its resting elbow at
+    /// 1 kHz (psi 0 → 0.6 rad in 1.2 s after 0.1 s at rest), recorded
+    /// sample by sample under `prior`.
+    fn forearm_turn(radius: f64, prior: &ValidationLimits) -> OnlineEstimator {
+        let mut path = [PathSample::default(); 1300];
+        let mut online = OnlineEstimator::new();
+        for (k, sample) in path.iter_mut().enumerate() {
+            let psi = 0.6 * ((k as f64 - 100.0) / 1200.0).clamp(0.0, 1.0);
+            *sample = PathSample {
+                time: k as f64 * 1e-3,
+                pose: Pose::new(
+                    radius - radius * libm::cos(psi),
+                    radius * libm::sin(psi),
+                    psi,
+                ),
+                wrench: Wrench::ZERO,
+            };
+        }
+        for end in 1..=path.len() {
+            online.record(&path[..end], prior);
+        }
+        online
+    }
+
+    /// REQ-MON-011: a provisional forearm exists only within the
+    /// validator's forearm range: a 0.06 m circle (what 18 quantized
+    /// points of a 0.19 m forearm fitted) gives none under the default
+    /// range (0.12-0.35 m), one when the range admits it, and a 0.20 m
+    /// forearm gives one, to its radius.
+    #[test]
+    fn req_mon_011_a_forearm_outside_the_plausible_range_is_not_provisional() {
+        let default = ValidationLimits::default();
+        assert!(forearm_turn(0.06, &default).forearm().is_none());
+        let wide = ValidationLimits {
+            min_forearm_length: 0.05,
+            ..default
+        };
+        let small = forearm_turn(0.06, &wide);
+        assert!(small.forearm().is_some(), "{small:?}");
+        let plausible = forearm_turn(0.20, &default);
+        let fit = plausible.forearm().expect("a provisional forearm");
+        assert!((fit.circle.radius - 0.20).abs() < 1e-6, "{fit:?}");
+    }
 }
