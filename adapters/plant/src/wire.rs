@@ -112,7 +112,7 @@ fn non_finite_token(line: &[u8]) -> Option<String> {
         if b == b'"' {
             in_string = true;
             string_start = i + 1;
-        } else if text[i..].starts_with("NaN") || text[i..].starts_with("Infinity") {
+        } else if bytes[i..].starts_with(b"NaN") || bytes[i..].starts_with(b"Infinity") {
             return Some(last_key);
         }
     }
@@ -546,6 +546,29 @@ mod tests {
         fn any_line_is_a_message_or_a_fault(line in proptest::collection::vec(any::<u8>(), 0..200)) {
             let _ = decode_message(&line, &names(&["q1"]));
             let _ = decode_handshake(&line);
+        }
+
+        /// REQ-ADP-004: the same over valid UTF-8 of any characters, JSON's
+        /// own among them (random bytes are rarely valid UTF-8 with a
+        /// multi-byte character, the case that once panicked).
+        #[test]
+        fn any_text_line_is_a_message_or_a_fault(line in "[{}\\[\\]\":,NaInfity0-9. \\PC]{0,80}") {
+            let _ = decode_message(line.as_bytes(), &names(&["q1"]));
+            let _ = decode_handshake(line.as_bytes());
+        }
+    }
+
+    /// REQ-ADP-004: a multi-byte character outside a string (here after
+    /// a key, and alone) is a malformed line, not a panic: the token scan
+    /// reads bytes, never a `str` slice that could start inside a
+    /// character (seen: "start byte index 1 is not a char boundary"
+    /// on the line `߃`, found by the proptest above).
+    #[test]
+    fn a_multibyte_character_outside_a_string_is_a_fault() {
+        for line in ["\u{7c3}", "{\"q1\": \u{7c3}NaN}", "\u{e9}Infinity"] {
+            let decoded = decode_message(line.as_bytes(), &names(&["q1"]));
+            assert!(decoded.is_err(), "{line}: {decoded:?}");
+            assert!(decode_handshake(line.as_bytes()).is_err(), "{line}");
         }
     }
 
