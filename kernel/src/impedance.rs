@@ -347,7 +347,7 @@ mod tests {
 mod verification {
     use super::*;
     use crate::config::KernelConfig;
-    use crate::kani_inputs::{any_pose, any_pose_rate};
+    use crate::kani_inputs::{any_pose, any_pose_rate, any_set_point};
     #[cfg(not(kani))]
     use limb_kani_stand_in as kani;
 
@@ -549,11 +549,7 @@ mod verification {
     #[cfg_attr(kani, kani::unwind(6))]
     pub fn verify_req_cmd_001_law_is_finite_only_on_finite_inputs() {
         let law = default_law();
-        let set_point = SetPoint {
-            pose: any_pose(),
-            velocity: any_pose_rate(),
-            acceleration: any_pose_rate(),
-        };
+        let set_point = any_set_point();
         let (pose, velocity) = (any_pose(), any_pose_rate());
         let wrench = law.wrench_about(pose, velocity, &set_point);
         let finite = pose.is_finite()
@@ -584,11 +580,7 @@ mod verification {
     #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
     pub fn verify_req_cmd_002_set_point_speed_is_limited_and_flagged() {
         let law = default_law();
-        let set_point = SetPoint {
-            pose: any_pose(),
-            velocity: any_pose_rate(),
-            acceleration: any_pose_rate(),
-        };
+        let set_point = any_set_point();
         let mut saturation = Saturation::default();
         let limited = law.limit_speed(set_point, &mut saturation);
         let out = ImpedanceOutput {

@@ -13,6 +13,7 @@ use limb_kani_stand_in as kani;
 use crate::arm::JointAngles;
 use crate::estimation::{ArmEstimate, FitEvidence, Method};
 use crate::geometry::{Point, Pose, PoseRate, Wrench};
+use crate::motion::SetPoint;
 use crate::path::PathSample;
 use crate::state::Request;
 use crate::validate::{validate, ValidatedArm, ValidationLimits};
@@ -25,6 +26,15 @@ pub fn any_pose() -> Pose {
 /// Any pose rate.
 pub fn any_pose_rate() -> PoseRate {
     PoseRate::new(kani::any(), kani::any(), kani::any())
+}
+
+/// Any set-point: pose, velocity and acceleration.
+pub fn any_set_point() -> SetPoint {
+    SetPoint {
+        pose: any_pose(),
+        velocity: any_pose_rate(),
+        acceleration: any_pose_rate(),
+    }
 }
 
 /// Any wrench.

@@ -406,7 +406,7 @@ pub const HOLD_HALVINGS: usize = 6;
 /// estimate was refined (`limb population --arms 500 --seed 2026`, arm
 /// 121). Without a provisional forearm there is no envelope to judge by,
 /// and the carrying pose is held.
-pub fn lift_hold(frame: &PathSample, online: &OnlineEstimator, config: &KernelConfig) -> Pose {
+fn lift_hold(frame: &PathSample, online: &OnlineEstimator, config: &KernelConfig) -> Pose {
     let carried = holding_pose(frame, &config.impedance.stiffness);
     let slack = |pose: Pose| {
         online

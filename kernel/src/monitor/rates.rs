@@ -224,7 +224,7 @@ mod verification {
         Ok(())
     }
 
-    /// A frame at `time` [s] with any finite pose and wrench under the
+    /// A frame at `time` [s] with any pose and wrench under the
     /// stand-in; under Kani the pose and wrench are zero: the window's
     /// bookkeeping reads only times ([`verify_req_mon_002_rates_are_zero_until_the_window_spans`]
     /// covers the values).
