@@ -12,7 +12,7 @@
 //! --log` carries it in the logged configuration
 //! (`validation.shoulder_rhythm`).
 
-use limb_kernel::validate::ValidationLimits;
+use limb_kernel::config::ValidationLimits;
 use limb_kernel::KernelConfig;
 use serde::Serialize;
 

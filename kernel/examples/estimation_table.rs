@@ -11,8 +11,9 @@
 #[path = "../tests/support/logs.rs"]
 mod logs;
 
+use limb_kernel::config::ValidationLimits;
 use limb_kernel::estimation::{estimate_arm, Method};
-use limb_kernel::validate::{validate, Rejection, ValidationLimits};
+use limb_kernel::validate::{validate, Rejection};
 
 const METHODS: [(Method, &str); 3] = [
     (Method::Hough, "hough"),

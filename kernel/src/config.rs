@@ -8,14 +8,15 @@
 //! limit.
 
 mod error;
+mod lift_shaping;
+mod validation;
 
-pub(crate) use error::all_positive;
-use error::{finite, non_negative, positive};
+use error::{all_positive, finite, non_negative, positive};
 pub use error::{ConfigError, ConfigField, ConfigProblem};
+pub use lift_shaping::LiftShaping;
+pub use validation::ValidationLimits;
 
-use crate::lift::LiftShaping;
 use crate::motion::EstimationMotionParameters;
-use crate::validate::ValidationLimits;
 
 /// A closed interval [low, high].
 #[derive(Clone, Copy, Debug, PartialEq)]

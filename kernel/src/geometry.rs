@@ -127,3 +127,9 @@ impl Wrench {
         self.fx.is_finite() && self.fz.is_finite() && self.ty.is_finite()
     }
 }
+/// Unsigned angle between `a` and `b` seen from `centre` [rad, 0..π].
+pub fn angle_between(centre: Point, a: Point, b: Point) -> f64 {
+    let (ax, az) = (a.x - centre.x, a.z - centre.z);
+    let (bx, bz) = (b.x - centre.x, b.z - centre.z);
+    libm::fabs(libm::atan2(ax * bz - az * bx, ax * bx + az * bz))
+}

@@ -11,12 +11,13 @@
 use limb_kani_stand_in as kani;
 
 use crate::arm::JointAngles;
+use crate::config::ValidationLimits;
 use crate::estimation::{ArmEstimate, FitEvidence, Method};
 use crate::geometry::{Point, Pose, PoseRate, Wrench};
 use crate::motion::SetPoint;
 use crate::path::PathSample;
 use crate::state::Request;
-use crate::validate::{validate, ValidatedArm, ValidationLimits};
+use crate::validate::{validate, ValidatedArm};
 
 /// Any pose.
 pub fn any_pose() -> Pose {

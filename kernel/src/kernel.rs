@@ -32,24 +32,20 @@
 
 use crate::command::{Command, CommandMode};
 use crate::config::{ConfigError, KernelConfig, SafetyLimits};
-use crate::estimation::ArmEstimate;
 use crate::geometry::{Pose, Wrench};
 use crate::impedance::{ImpedanceLaw, Saturation};
 use crate::lift::{holding_pose, LiftPhase};
-use crate::monitor::force::ForceMonitor;
-use crate::monitor::joint_limits::JointLimitMonitor;
 use crate::monitor::rates::RateWindow;
-use crate::monitor::speed::SpeedMonitor;
-use crate::monitor::watchdog::Watchdog;
-use crate::monitor::workspace::WorkspaceMonitor;
+use crate::monitor::set::MonitorSet;
 use crate::monitor::Verdict;
 use crate::motion::SetPoint;
 use crate::path::{GraspPath, PathSample};
 use crate::state::{
-    EstimateStep, Grasp, LimitUpdateRefusal, Refusal, RefusalReason, Request, State, StateKind,
-    StopReason, StopStart,
+    EstimateStage, EstimateStep, Grasp, LimitUpdateRefusal, Refusal, RefusalReason, Request,
+    SafeStop, State, StateKind, StopStart, Validated,
 };
 use crate::stop::StopCategory;
+use crate::stop::StopReason;
 use crate::trace::{Cause, Event, Trace, TraceEvent};
 use crate::validate::ValidatedArm;
 
@@ -62,6 +58,8 @@ use crate::validate::ValidatedArm;
 pub struct Kernel {
     config: KernelConfig,
     law: ImpedanceLaw,
+    /// The monitors of `config.limits`.
+    monitors: MonitorSet,
     state: State,
     path: GraspPath,
     rates: RateWindow,
@@ -121,6 +119,7 @@ impl Kernel {
         Self {
             law: ImpedanceLaw::new(&config.impedance, l.max_force, l.max_torque, l.max_speed),
             rates: RateWindow::new(l.rate_window),
+            monitors: MonitorSet::from_limits(l),
             config,
             state: State::Grasp(Grasp::new()),
             path: GraspPath::new(),
@@ -181,9 +180,9 @@ impl Kernel {
         frame: &PathSample,
         now: f64,
     ) -> Result<Command, (StopReason, Option<Pose>)> {
-        let watchdog = Watchdog::new(self.config.limits.max_sensor_age);
         let previous = self.last_frame.map(|f| f.time);
-        watchdog
+        self.monitors
+            .watchdog
             .check(frame, now, previous, self.last_now)
             .map_err(|violation| (StopReason::Monitor(violation), None))?;
         self.last_now = Some(now);
@@ -198,12 +197,18 @@ impl Kernel {
             .map_err(|violation| (StopReason::Monitor(violation), at))?;
         let (set_point, mode) = match self.state_set_point(frame, now) {
             Ok(Plan::Follow(set_point, mode)) => (set_point, mode),
-            Ok(Plan::Validate(estimate)) => {
-                let hold = self
-                    .conclude_estimation(&estimate, now)
-                    .map_err(|reason| (reason, at))?;
+            Ok(Plan::Enter(validated)) => {
+                let hold = validated.hold();
+                self.state = State::Validated(validated);
+                self.record(
+                    now,
+                    StateKind::Estimate,
+                    StateKind::Validated,
+                    Cause::ModelValidated,
+                );
                 (hold, CommandMode::Hold)
             }
+            Ok(Plan::Stopped(stop)) => return Ok(self.stopped_step(&stop, frame, now)),
             Err(reason) => return Err((reason, at)),
         };
         let out = self.law.command(frame.pose, rates.velocity, set_point);
@@ -225,7 +230,7 @@ impl Kernel {
     }
 
     /// The stop that holds the kernel, while it holds it.
-    pub fn stopped(&self) -> Option<&crate::state::SafeStop> {
+    pub fn stopped(&self) -> Option<&SafeStop> {
         match &self.state {
             State::SafeStop(stop) => Some(stop),
             _ => None,
@@ -236,12 +241,7 @@ impl Kernel {
     /// wrench (a hold: the impedance law about the set-point on a finite
     /// frame, else the wrench of the stop), and the frame, when finite and
     /// newer, into the rate window that judges the reset.
-    fn stopped_step(
-        &mut self,
-        stop: &crate::state::SafeStop,
-        frame: &PathSample,
-        now: f64,
-    ) -> Command {
+    fn stopped_step(&mut self, stop: &SafeStop, frame: &PathSample, now: f64) -> Command {
         let finite = frame.time.is_finite() && frame.pose.is_finite() && frame.wrench.is_finite();
         let newer = self.last_frame.is_none_or(|f| frame.time > f.time);
         if finite && newer && now.is_finite() && frame.time <= now {
@@ -362,16 +362,18 @@ impl Kernel {
             false,
         );
         if let State::Estimate(estimate) = &self.state {
-            match estimate.lift().phase() {
-                LiftPhase::Lifting | LiftPhase::AwaitingForearm { .. } => {
-                    (peak_speed, min_time, coast) =
-                        (shaping.hold_speed, crate::stop::LIFT_HOLD_MIN_TIME, true);
-                }
-                LiftPhase::Settling { hold, .. } => {
-                    holding = Some(*hold);
-                    peak_speed = shaping.hold_speed;
-                }
-                LiftPhase::Concluding { .. } => {}
+            match estimate.stage() {
+                EstimateStage::Lifting(lift) => match lift.phase() {
+                    LiftPhase::Lifting | LiftPhase::AwaitingForearm { .. } => {
+                        (peak_speed, min_time, coast) =
+                            (shaping.hold_speed, crate::stop::LIFT_HOLD_MIN_TIME, true);
+                    }
+                    LiftPhase::Settling { hold, .. } => {
+                        holding = Some(*hold);
+                        peak_speed = shaping.hold_speed;
+                    }
+                },
+                EstimateStage::Concluding(_) => {}
             }
         }
         StopStart {
@@ -390,7 +392,7 @@ impl Kernel {
     /// True when a reset at `now` finds the stop's set-point at rest and
     /// the arm still: a fresh, finite frame, the rate window spanned and
     /// the grasp slower than [`crate::stop::RESET_MAX_SPEED`].
-    fn still_for_reset(&self, stop: &crate::state::SafeStop, now: f64) -> bool {
+    fn still_for_reset(&self, stop: &SafeStop, now: f64) -> bool {
         stop.is_settled(now)
             && self.fresh_pose(now).is_some()
             && self.rates.spans()
@@ -456,12 +458,11 @@ impl Kernel {
                 }
             },
             (Request::ApproveManipulation(target), State::Validated(validated)) => {
-                let (joints, workspace) = self.geometry_monitors();
                 match validated.plan_manipulation(
                     target,
                     self.config.manipulation_peak_speed,
-                    &joints,
-                    &workspace,
+                    &self.monitors.joint_limits,
+                    &self.monitors.workspace,
                 ) {
                     Ok(plan) => Ok(State::Manipulate(validated.begin_manipulation(plan, now))),
                     Err(error) => Err((
@@ -523,6 +524,7 @@ impl Kernel {
             limits.max_speed,
         );
         self.rates = RateWindow::new(limits.rate_window);
+        self.monitors = MonitorSet::from_limits(&limits);
         Ok(())
     }
 
@@ -534,18 +536,6 @@ impl Kernel {
             .then_some(frame.pose)
     }
 
-    fn geometry_monitors(&self) -> (JointLimitMonitor, WorkspaceMonitor) {
-        let l = &self.config.limits;
-        (
-            JointLimitMonitor::from_limits(l),
-            WorkspaceMonitor {
-                x: l.workspace_x,
-                z: l.workspace_z,
-                table_tolerance: l.table_tolerance,
-            },
-        )
-    }
-
     /// REQ-MON-012: in a state that moves the arm (Estimate, Manipulate)
     /// the set-point about to be commanded is checked against the same
     /// workspace box and table as the measured pose (and, with a model,
@@ -555,30 +545,24 @@ impl Kernel {
         if !matches!(self.state, State::Estimate(_) | State::Manipulate(_)) {
             return Ok(());
         }
-        let (_, workspace) = self.geometry_monitors();
         let pose = set_point.pose;
         let arm = self.state.arm().map(ValidatedArm::geometry);
-        workspace.check(pose, arm.map(|a| a.elbow_from_pose(pose)))
+        self.monitors
+            .workspace
+            .check(pose, arm.map(|a| a.elbow_from_pose(pose)))
     }
 
     /// The monitors that apply to the current state (watchdog excluded).
     fn check_monitors(&self, frame: &PathSample, speed: f64, force_rate: f64) -> Verdict {
-        let l = &self.config.limits;
-        ForceMonitor {
-            max_force: l.max_force,
-            max_torque: l.max_torque,
-            max_force_rate: l.max_force_rate,
-        }
-        .check(frame.wrench, force_rate)?;
+        let m = &self.monitors;
+        m.force.check(frame.wrench, force_rate)?;
         if matches!(self.state, State::Estimate(_) | State::Manipulate(_)) {
-            SpeedMonitor {
-                max_speed: l.max_speed,
-            }
-            .check(speed)?;
+            m.speed.check(speed)?;
         }
-        let (joints, workspace) = self.geometry_monitors();
+        let joints = &m.joint_limits;
         let arm = self.state.arm().map(ValidatedArm::geometry);
-        workspace.check(frame.pose, arm.map(|a| a.elbow_from_pose(frame.pose)))?;
+        m.workspace
+            .check(frame.pose, arm.map(|a| a.elbow_from_pose(frame.pose)))?;
         match (&self.state, arm) {
             (_, Some(arm)) => joints.check(arm, frame.pose),
             (State::Estimate(estimate), None) => {
@@ -589,7 +573,7 @@ impl Kernel {
     }
 
     /// The state's set-point for this step, with its mode, or, on the step
-    /// the estimation's refinement finishes, the estimate to validate.
+    /// the estimation concludes, the validated state to enter.
     fn state_set_point(&mut self, frame: &PathSample, now: f64) -> Result<Plan, StopReason> {
         Ok(match &mut self.state {
             State::Grasp(grasp) => Plan::Follow(grasp.hold(frame.pose), CommandMode::Hold),
@@ -597,11 +581,14 @@ impl Kernel {
             State::Manipulate(manipulate) => {
                 Plan::Follow(manipulate.set_point(now), CommandMode::Track)
             }
-            State::SafeStop(_) => return Err(StopReason::Operator),
+            // Kernel::step gives a stopped kernel the stop's own step
+            // before any monitor; were a running step to find one, it
+            // would give the same.
+            State::SafeStop(stop) => Plan::Stopped(*stop),
             State::Estimate(estimate) => {
-                let lifting = estimate.lift().ended().is_none();
+                let lifting = estimate.lift_ended().is_none();
                 let step = estimate.advance(&mut self.path, frame, now, &self.config)?;
-                if let Some(reason) = estimate.lift().ended().filter(|_| lifting) {
+                if let Some(reason) = estimate.lift_ended().filter(|_| lifting) {
                     self.trace.record(TraceEvent {
                         time: now,
                         event: Event::LiftEnded(reason),
@@ -610,36 +597,10 @@ impl Kernel {
                 match step {
                     EstimateStep::Move(set_point) => Plan::Follow(set_point, CommandMode::Track),
                     EstimateStep::Hold(set_point) => Plan::Follow(set_point, CommandMode::Hold),
-                    EstimateStep::Concluded(estimate) => Plan::Validate(estimate),
+                    EstimateStep::Validated(validated) => Plan::Enter(validated),
                 }
             }
         })
-    }
-
-    /// Estimate → Validated through the validator (the only way to a
-    /// validated model); returns the hold set-point.
-    fn conclude_estimation(
-        &mut self,
-        estimate: &ArmEstimate,
-        now: f64,
-    ) -> Result<SetPoint, StopReason> {
-        let State::Estimate(estimating) = self.state else {
-            return Err(StopReason::Operator);
-        };
-        let start = self
-            .path
-            .first()
-            .map_or(estimating.grasp_pose().point(), |s| s.pose.point());
-        let validated = estimating.conclude(estimate, start, &self.config.validation)?;
-        let hold = validated.hold();
-        self.state = State::Validated(validated);
-        self.record(
-            now,
-            StateKind::Estimate,
-            StateKind::Validated,
-            Cause::ModelValidated,
-        );
-        Ok(hold)
     }
 
     /// Enters SafeStop for `reason` and returns the stop's first command
@@ -687,12 +648,15 @@ impl Kernel {
 enum Plan {
     /// Command this set-point in this mode.
     Follow(SetPoint, CommandMode),
-    /// The estimation concluded: validate this estimate.
-    Validate(ArmEstimate),
+    /// The estimation concluded and the validator accepted its model:
+    /// enter this state.
+    Enter(Validated),
+    /// The kernel is stopped: the stop's own step.
+    Stopped(SafeStop),
 }
 
 /// Moves any state into SafeStop.
-fn stop_state(state: State, reason: StopReason, start: StopStart) -> crate::state::SafeStop {
+fn stop_state(state: State, reason: StopReason, start: StopStart) -> SafeStop {
     match state {
         State::Grasp(s) => s.stop(reason, start),
         State::Estimate(s) => s.stop(reason, start),

@@ -86,7 +86,5 @@ pub use command::{Command, CommandMode};
 pub use config::KernelConfig;
 pub use kernel::Kernel;
 pub use path::PathSample;
-pub use state::{
-    LimitUpdateRefusal, Refusal, RefusalReason, Request, State, StateKind, StopReason,
-};
-pub use stop::StopCategory;
+pub use state::{LimitUpdateRefusal, Refusal, RefusalReason, Request, State, StateKind};
+pub use stop::{StopCategory, StopReason};

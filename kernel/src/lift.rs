@@ -17,12 +17,14 @@
 //!      │ line, for long arms) complete
 //!      ▼
 //!   Settling (a minimum-jerk move to the holding pose x − f_ext/K, drawn
-//!      │      back towards x where the joint envelope would leave the
-//!      │      margin there, at hold_speed / hold_rate, then held for
-//!      │      settle_time; recording)
-//!      ▼
-//!   Concluding (held still; the refinement runs SAMPLES_PER_STEP per step)
+//!             back towards x where the joint envelope would leave the
+//!             margin there, at hold_speed / hold_rate, then held for
+//!             settle_time; recording)
 //! ```
+//!
+//! Once settled ([`ShapedLift::settled`]) the lift is over: the Estimate
+//! state concludes (held still; the refinement runs `SAMPLES_PER_STEP`
+//! per step, [`crate::state::EstimateStage::Concluding`]).
 //!
 //! Before any provisional model exists the prior bounds the motion: the
 //! set-point stays within `prior_reach` of the grasp (the elbow rests on the
@@ -33,88 +35,13 @@
 //! lift ends when that worst case comes within `joint_margin` of a limit;
 //! the joint-limit monitor stops the kernel if it ever crosses one.
 
-use crate::config::{all_positive, ConfigError, ConfigField, KernelConfig, SafetyLimits};
-use crate::estimation::online::{JointEnvelope, OnlineEstimator};
-use crate::estimation::refine::Refinement;
+use crate::config::{KernelConfig, LiftShaping, SafetyLimits};
+use crate::estimation::online::OnlineEstimator;
 use crate::geometry::Pose;
+use crate::monitor::joint_limits::JointEnvelope;
 use crate::monitor::Limit;
 use crate::motion::{EstimationMotion, MinimumJerkMove, SetPoint};
 use crate::path::PathSample;
-
-/// How the kernel shapes and ends its estimation lift.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
-pub struct LiftShaping {
-    /// Farthest the set-point may move from the grasp before a provisional
-    /// forearm exists [m]. 0.25 m: the forearm sweeps the
-    /// [`crate::estimation::online::PROVISIONAL_ARC`] with the set-point
-    /// 0.12-0.14 m out on the six arms of `plant.md`.
-    pub prior_reach: f64,
-    /// Longest wait at `prior_reach` for a provisional forearm [s].
-    pub forearm_wait: f64,
-    /// Upper-arm arc that ends the lift [rad]. 0.9 rad: the validator needs
-    /// 0.5 rad; the upper arm then stands ≈ 52° up, far from the limits.
-    pub target_arc: f64,
-    /// Margin kept between the joint envelope and the joint limits [rad].
-    pub joint_margin: f64,
-
-    /// Time the set-point is held after the lift ends, still recording,
-    /// before the conclusion [s].
-    pub settle_time: f64,
-    /// Peak grasp-point speed of the move from the lift's set-point to the
-    /// holding pose [m/s]; the move is ≈ 3 cm (the dynamic part of the
-    /// spring's stretch). A jump would reach a position-controlled robot
-    /// (KUKA joint-position overlay) as a step of the joint targets.
-    pub hold_speed: f64,
-    /// Peak forearm rate of that move [rad/s] (psi's set-point lags the arm
-    /// by up to 0.5 rad at the end of the lift).
-    pub hold_rate: f64,
-    /// How far the lift continues along its line when the planned lift is
-    /// complete before the arcs suffice [m] (long arms).
-    pub extension: f64,
-    /// Shortest duration of that move [s]: a 3 mm move (force noise / K) in
-    /// 56 ms accelerates the set-point at 5.5 m/s², 11 N of inertia
-    /// feed-forward, and tripped the force-rate monitor.
-    pub hold_move_time: f64,
-}
-
-impl Default for LiftShaping {
-    fn default() -> Self {
-        Self {
-            prior_reach: 0.25,
-            forearm_wait: 5.0,
-            target_arc: 0.9,
-            joint_margin: 0.10,
-            settle_time: 1.0,
-            hold_speed: 0.10,
-            hold_rate: 0.5,
-            hold_move_time: 1.0,
-            extension: 0.10,
-        }
-    }
-}
-
-impl LiftShaping {
-    /// Checks that every value is finite and positive.
-    ///
-    /// # Errors
-    /// The first field that is not.
-    pub fn check(&self) -> Result<(), ConfigError> {
-        use ConfigField as F;
-        all_positive(&[
-            (F::PriorReach, self.prior_reach),
-            (F::ForearmWait, self.forearm_wait),
-            (F::TargetArc, self.target_arc),
-            (F::JointMargin, self.joint_margin),
-            (F::SettleTime, self.settle_time),
-            (F::HoldSpeed, self.hold_speed),
-            (F::HoldRate, self.hold_rate),
-            (F::HoldMoveTime, self.hold_move_time),
-            (F::Extension, self.extension),
-        ])
-    }
-}
 
 /// Why the lift ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -142,9 +69,6 @@ impl LiftEnd {
 
 /// Where the lift is.
 #[derive(Clone, Copy, Debug, PartialEq)]
-// No heap (no_std, no alloc): the larger variant (the estimation's running
-// sums, ≈ 1 kB) lives inline; the kernel is one fixed-size value.
-#[allow(clippy::large_enum_variant)]
 pub enum LiftPhase {
     /// Following the planned lift.
     Lifting,
@@ -164,15 +88,6 @@ pub enum LiftPhase {
         hold: Pose,
         /// Why the lift ended.
         reason: LiftEnd,
-    },
-    /// Held still while the estimate is refined.
-    Concluding {
-        /// The holding pose.
-        hold: Pose,
-        /// Why the lift ended.
-        reason: LiftEnd,
-        /// The refinement in progress.
-        refinement: Refinement,
     },
 }
 
@@ -221,16 +136,6 @@ impl ShapedLift {
     /// The phase.
     pub fn phase(&self) -> &LiftPhase {
         &self.phase
-    }
-
-    /// Mutable phase, for the conclusion's refinement.
-    pub(crate) fn phase_mut(&mut self) -> &mut LiftPhase {
-        &mut self.phase
-    }
-
-    /// True while the path is still being recorded (not Concluding).
-    pub fn is_recording(&self) -> bool {
-        !matches!(self.phase, LiftPhase::Concluding { .. })
     }
 
     /// Advances the lift to kernel time `now` given the online estimate
@@ -313,9 +218,7 @@ impl ShapedLift {
             LiftPhase::Settling { since, to_hold, .. } if now - since < to_hold.duration() => {
                 Ok(LiftCommand::Move(to_hold.at(now - since)))
             }
-            LiftPhase::Settling { hold, .. } | LiftPhase::Concluding { hold, .. } => {
-                Ok(LiftCommand::Hold(SetPoint::hold(hold)))
-            }
+            LiftPhase::Settling { hold, .. } => Ok(LiftCommand::Hold(SetPoint::hold(hold))),
         }
     }
 
@@ -354,9 +257,7 @@ impl ShapedLift {
     /// Why the lift ended, once it has.
     pub fn ended(&self) -> Option<LiftEnd> {
         match self.phase {
-            LiftPhase::Settling { reason, .. } | LiftPhase::Concluding { reason, .. } => {
-                Some(reason)
-            }
+            LiftPhase::Settling { reason, .. } => Some(reason),
             _ => None,
         }
     }
@@ -364,7 +265,7 @@ impl ShapedLift {
     /// The pose held once the lift has ended.
     pub fn hold(&self) -> Option<Pose> {
         match self.phase {
-            LiftPhase::Settling { hold, .. } | LiftPhase::Concluding { hold, .. } => Some(hold),
+            LiftPhase::Settling { hold, .. } => Some(hold),
             _ => None,
         }
     }

@@ -16,7 +16,8 @@
 //! a method that consumes the state it leaves. [`Validated`] and
 //! [`Manipulate`] hold a [`ValidatedArm`], which only
 //! [`crate::validate::validate`] constructs, and the only way to build a
-//! `Validated` is [`Estimate::conclude`], which calls the validator. So a
+//! `Validated` is the conclusion of [`Estimate::advance`], which calls the
+//! validator. So a
 //! `Manipulate` without a validated model does not compile. [`SafeStop`] is
 //! latched: its only exit is [`SafeStop::reset`], back to [`Grasp`].
 //!
@@ -24,16 +25,17 @@
 //! and refuses, with a reason ([`Refusal`]), any [`Request`] the current
 //! state has no transition for. [`Estimate::advance`] does one step of the
 //! estimation (record, shape the lift, or a slice of the refinement); when
-//! it returns [`EstimateStep::Concluded`] the kernel calls
-//! [`Estimate::conclude`].
+//! it returns [`EstimateStep::Validated`] the kernel enters that state.
 
 use crate::arm::JointAngles;
+use crate::config::ValidationLimits;
 use crate::config::{ConfigError, KernelConfig};
-use crate::estimation::online::{JointEnvelope, OnlineEstimator};
-use crate::estimation::refine::{Progress, SAMPLES_PER_STEP};
-use crate::estimation::{ArmEstimate, EstimateError};
-use crate::geometry::{Point, Pose, Wrench};
-use crate::lift::{LiftCommand, LiftPhase, ShapedLift};
+use crate::estimation::online::OnlineEstimator;
+use crate::estimation::refine::{Progress, Refinement, SAMPLES_PER_STEP};
+use crate::estimation::EstimateError;
+use crate::geometry::{Pose, Wrench};
+use crate::lift::{LiftCommand, LiftEnd, ShapedLift};
+use crate::monitor::joint_limits::JointEnvelope;
 use crate::monitor::joint_limits::JointLimitMonitor;
 use crate::monitor::workspace::WorkspaceMonitor;
 use crate::monitor::Violation;
@@ -41,8 +43,9 @@ use crate::motion::{
     EstimationMotion, EstimationMotionParameters, MinimumJerkMove, PlanError, SetPoint,
 };
 use crate::path::{is_due, GraspPath, PathSample};
+use crate::stop::StopReason;
 use crate::stop::{StopCategory, StopMotion, HOLD_MIN_TIME, RAMP_DOWN_TIME};
-use crate::validate::{validate, Rejection, ValidatedArm, ValidationLimits};
+use crate::validate::{validate, ValidatedArm};
 
 /// Names of the states, for events and reports.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -59,42 +62,6 @@ pub enum StateKind {
     Manipulate = 4,
     /// Latched stop.
     SafeStop = 5,
-}
-
-/// Why the kernel entered SafeStop.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub enum StopReason {
-    /// A monitor tripped.
-    Monitor(Violation),
-    /// The operator (or a supervisor) asked for a stop.
-    Operator,
-    /// The estimator could not produce an estimate.
-    EstimationFailed(EstimateError),
-    /// The validator rejected the estimate.
-    ModelRejected(Rejection),
-    /// The grasp path outgrew its buffer before the motion ended.
-    PathBufferFull,
-    /// A motion could not be planned.
-    PlanFailed(PlanError),
-    /// The command generator produced a non-finite set-point.
-    NonFiniteCommand,
-}
-
-impl StopReason {
-    /// Stable numeric code of the reason (logs, wire protocols); the
-    /// payload has its own (e.g. [`crate::monitor::Limit::code`]).
-    pub const fn code(&self) -> u16 {
-        match self {
-            StopReason::Monitor(_) => 1,
-            StopReason::Operator => 2,
-            StopReason::EstimationFailed(_) => 3,
-            StopReason::ModelRejected(_) => 4,
-            StopReason::PathBufferFull => 5,
-            StopReason::PlanFailed(_) => 6,
-            StopReason::NonFiniteCommand => 7,
-        }
-    }
 }
 
 /// Grasp: the robot holds the wrist where it found it.
@@ -119,21 +86,57 @@ pub const GRASP_HOLD_FRAMES: u16 = 64;
 /// Estimate: the estimation lift is running, shaped by the provisional
 /// model ([`crate::lift`]), the path recorded and estimated online; then,
 /// held still, the estimate is refined in bounded slices.
+///
+/// # Invariants
+/// The stage only moves forward, Lifting → Concluding; the estimation's
+/// conclusion (its hold, the lift's end, the refinement) exists only in
+/// Concluding, so no step can refine while the path is still recorded.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Estimate {
-    lift: ShapedLift,
+    /// The grasp pose the motion started from (frame S).
+    grasp: Pose,
     online: OnlineEstimator,
+    stage: EstimateStage,
+}
+
+/// Where the estimation is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+// No heap (no_std, no alloc): the refinement's running sums (≈ 1 kB) live
+// inline; the kernel is one fixed-size value.
+#[allow(clippy::large_enum_variant)]
+pub enum EstimateStage {
+    /// The lift runs (its phases: [`crate::lift::LiftPhase`]); the path is
+    /// recorded.
+    Lifting(ShapedLift),
+    /// The lift has ended and the arm settled: held still while the
+    /// estimate is refined; nothing more is recorded.
+    Concluding(Conclusion),
+}
+
+/// The estimation's conclusion in progress: where the arm is held, why the
+/// lift ended, and the refinement.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Conclusion {
+    /// The holding pose (frame S).
+    pub hold: Pose,
+    /// Why the lift ended.
+    pub reason: LiftEnd,
+    refinement: Refinement,
 }
 
 /// What one Estimate step produced.
 #[derive(Clone, Copy, Debug, PartialEq)]
+// The validated state is the larger variant (the model and its evidence);
+// it is made once per session and moved into the kernel's state at once.
+#[allow(clippy::large_enum_variant)]
 pub enum EstimateStep {
     /// Follow this moving set-point (the lift).
     Move(SetPoint),
     /// Hold this set-point (paused, settling or concluding).
     Hold(SetPoint),
-    /// The refinement finished: this estimate goes to the validator.
-    Concluded(ArmEstimate),
+    /// The refinement finished and the validator accepted its estimate:
+    /// the state to enter (its hold is the conclusion's).
+    Validated(Validated),
 }
 
 /// Validated: a validated model, the arm held still.
@@ -319,8 +322,9 @@ impl Grasp {
     ) -> Result<Estimate, (Self, PlanError)> {
         match EstimationMotion::new(grasp, parameters) {
             Ok(motion) => Ok(Estimate {
-                lift: ShapedLift::new(motion, now),
+                grasp,
                 online: OnlineEstimator::new(),
+                stage: EstimateStage::Lifting(ShapedLift::new(motion, now)),
             }),
             Err(error) => Err((self, error)),
         }
@@ -339,14 +343,22 @@ impl Default for Grasp {
 }
 
 impl Estimate {
-    /// The grasp pose the motion started from.
+    /// The grasp pose the motion started from (frame S).
     pub fn grasp_pose(&self) -> Pose {
-        self.lift.motion().lift().start()
+        self.grasp
     }
 
-    /// The lift and where it is.
-    pub fn lift(&self) -> &ShapedLift {
-        &self.lift
+    /// Where the estimation is.
+    pub fn stage(&self) -> &EstimateStage {
+        &self.stage
+    }
+
+    /// Why the lift ended, once it has.
+    pub fn lift_ended(&self) -> Option<LiftEnd> {
+        match &self.stage {
+            EstimateStage::Lifting(lift) => lift.ended(),
+            EstimateStage::Concluding(conclusion) => Some(conclusion.reason),
+        }
     }
 
     /// The online estimate so far.
@@ -354,15 +366,17 @@ impl Estimate {
         &self.online
     }
 
-    /// One step at kernel time `now` with measured `frame`: records the
-    /// sample into `path` and the online estimate when one is due (at most
-    /// one per [`PATH_SAMPLE_PERIOD`], never while concluding), shapes the
-    /// lift, or runs one slice of the refinement. O(1) work: one moment
-    /// update, or at most [`SAMPLES_PER_STEP`] refinement samples.
+    /// One step at kernel time `now` with measured `frame`: while lifting,
+    /// records the sample into `path` and the online estimate when one is
+    /// due (at most one per [`PATH_SAMPLE_PERIOD`]) and shapes the lift;
+    /// once the lift has settled, concludes: one slice of the refinement
+    /// per step and, on the step it finishes, the validator (the only way
+    /// into [`Validated`], held where the lift ended). O(1) work: one
+    /// moment update, or at most [`SAMPLES_PER_STEP`] refinement samples.
     ///
     /// # Errors
-    /// The path buffer is full, no forearm appeared in time, or the
-    /// estimation failed.
+    /// The path buffer is full, no forearm appeared in time, the
+    /// estimation failed, or the validator rejected the estimate.
     pub fn advance(
         &mut self,
         path: &mut GraspPath,
@@ -370,41 +384,37 @@ impl Estimate {
         now: f64,
         config: &KernelConfig,
     ) -> Result<EstimateStep, StopReason> {
-        if self.lift.is_recording() && is_due(path.last(), frame.time) {
+        let lift = match &mut self.stage {
+            EstimateStage::Concluding(conclusion) => {
+                return conclusion.advance(path, self.grasp, &config.validation)
+            }
+            EstimateStage::Lifting(lift) => lift,
+        };
+        if is_due(path.last(), frame.time) {
             path.push(*frame).map_err(|_| StopReason::PathBufferFull)?;
             self.online.record(path, &config.validation);
         }
-        if let Some((hold, reason)) = self.lift.settled(now, config.lift_shaping.settle_time) {
-            let refinement = self
-                .online
-                .refinement(path.len(), config.validation.shoulder_rhythm)
-                .ok_or(StopReason::EstimationFailed(
-                    EstimateError::UpperArmPhaseTooShort,
-                ))?;
-            *self.lift.phase_mut() = LiftPhase::Concluding {
-                hold,
-                reason,
-                refinement,
-            };
-        }
-        if let LiftPhase::Concluding {
-            hold, refinement, ..
-        } = self.lift.phase_mut()
-        {
-            return match refinement.advance(path, SAMPLES_PER_STEP) {
-                Progress::Running(_) => Ok(EstimateStep::Hold(SetPoint::hold(*hold))),
-                Progress::Done(Ok(estimate)) => Ok(EstimateStep::Concluded(estimate)),
-                Progress::Done(Err(error)) => Err(StopReason::EstimationFailed(error)),
-            };
-        }
-        let command = self
-            .lift
-            .advance(now, frame, &self.online, config)
-            .map_err(StopReason::EstimationFailed)?;
-        Ok(match command {
-            LiftCommand::Move(set_point) => EstimateStep::Move(set_point),
-            LiftCommand::Hold(set_point) => EstimateStep::Hold(set_point),
-        })
+        let Some((hold, reason)) = lift.settled(now, config.lift_shaping.settle_time) else {
+            let command = lift
+                .advance(now, frame, &self.online, config)
+                .map_err(StopReason::EstimationFailed)?;
+            return Ok(match command {
+                LiftCommand::Move(set_point) => EstimateStep::Move(set_point),
+                LiftCommand::Hold(set_point) => EstimateStep::Hold(set_point),
+            });
+        };
+        let refinement =
+            Refinement::after(&self.online, path.len(), config.validation.shoulder_rhythm).ok_or(
+                StopReason::EstimationFailed(EstimateError::UpperArmPhaseTooShort),
+            )?;
+        let mut conclusion = Conclusion {
+            hold,
+            reason,
+            refinement,
+        };
+        let step = conclusion.advance(path, self.grasp, &config.validation);
+        self.stage = EstimateStage::Concluding(conclusion);
+        step
     }
 
     /// The worst case of the person's joints at `pose` under the provisional
@@ -414,28 +424,38 @@ impl Estimate {
         self.online.joint_envelope(pose, prior)
     }
 
-    /// Validates the refined `estimate` of the path that started at grasp
-    /// point `start`: the only way into [`Validated`]. The arm is then held
-    /// where the lift ended.
-    ///
-    /// # Errors
-    /// The stop reason: the model was rejected.
-    pub fn conclude(
-        self,
-        estimate: &ArmEstimate,
-        start: Point,
-        limits: &ValidationLimits,
-    ) -> Result<Validated, StopReason> {
-        let arm = validate(estimate, start, limits).map_err(StopReason::ModelRejected)?;
-        Ok(Validated {
-            arm,
-            hold: self.lift.hold().unwrap_or(self.grasp_pose()),
-        })
-    }
-
     /// Stops.
     pub fn stop(self, reason: StopReason, start: StopStart) -> SafeStop {
         SafeStop::latch(reason, start)
+    }
+}
+
+impl Conclusion {
+    /// One slice of the refinement over `path` (at most
+    /// [`SAMPLES_PER_STEP`] samples), holding the arm; on the slice that
+    /// finishes it, the validator under `limits`, the path's first sample
+    /// (or the `grasp` pose, frame S) its start.
+    ///
+    /// # Errors
+    /// The refinement failed or the validator rejected its estimate.
+    fn advance(
+        &mut self,
+        path: &GraspPath,
+        grasp: Pose,
+        limits: &ValidationLimits,
+    ) -> Result<EstimateStep, StopReason> {
+        match self.refinement.advance(path, SAMPLES_PER_STEP) {
+            Progress::Running(_) => Ok(EstimateStep::Hold(SetPoint::hold(self.hold))),
+            Progress::Done(Ok(estimate)) => {
+                let start = path.first().map_or(grasp.point(), |s| s.pose.point());
+                let arm = validate(&estimate, start, limits).map_err(StopReason::ModelRejected)?;
+                Ok(EstimateStep::Validated(Validated {
+                    arm,
+                    hold: self.hold,
+                }))
+            }
+            Progress::Done(Err(error)) => Err(StopReason::EstimationFailed(error)),
+        }
     }
 }
 
@@ -784,6 +804,7 @@ mod verification {
     use super::*;
     use crate::config::SafetyLimits;
     use crate::kani_inputs::{validated_arm, HOLD, MANIPULATION_TARGET};
+    use crate::monitor::set::MonitorSet;
     #[cfg(not(kani))]
     use limb_kani_stand_in as kani;
 
@@ -798,13 +819,11 @@ mod verification {
     #[cfg_attr(kani, kani::stub(libm::sin, crate::kani_stubs::stub::sin))]
     #[cfg_attr(kani, kani::stub(libm::cos, crate::kani_stubs::stub::cos))]
     pub fn verify_req_sm_003_targets_are_checked() {
-        let l = SafetyLimits::default();
-        let joints = JointLimitMonitor::from_limits(&l);
-        let workspace = WorkspaceMonitor {
-            x: l.workspace_x,
-            z: l.workspace_z,
-            table_tolerance: l.table_tolerance,
-        };
+        let MonitorSet {
+            joint_limits: joints,
+            workspace,
+            ..
+        } = MonitorSet::from_limits(&SafetyLimits::default());
         let validated = Validated::holding(validated_arm(), HOLD);
         let target = if kani::any() {
             JointAngles {

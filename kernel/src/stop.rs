@@ -35,11 +35,13 @@
 //! continuous across the stop), REQ-STOP-003 (latched stop, still arm for
 //! the reset, resume from where the arm is held).
 
+use crate::estimation::EstimateError;
 use crate::geometry::{Pose, PoseRate, Wrench};
 use crate::monitor::Limit;
+use crate::monitor::Violation;
+use crate::motion::PlanError;
 use crate::motion::{SetPoint, MINIMUM_JERK_PEAK_RATE};
-use crate::state::{Request, StopReason};
-use crate::trace::Cause;
+use crate::validate::Rejection;
 
 /// What a stop does to the arm. Codes and names are stable (logs, wire
 /// protocols, `limb run --stop-at`'s JSON).
@@ -102,6 +104,42 @@ pub const RAMP_DOWN_TIME: f64 = 1.0;
 /// (0.1 mm position noise over 50 ms: 2.8 mm/s).
 pub const RESET_MAX_SPEED: f64 = 0.02;
 
+/// Why the kernel entered SafeStop.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum StopReason {
+    /// A monitor tripped.
+    Monitor(Violation),
+    /// The operator (or a supervisor) asked for a stop.
+    Operator,
+    /// The estimator could not produce an estimate.
+    EstimationFailed(EstimateError),
+    /// The validator rejected the estimate.
+    ModelRejected(Rejection),
+    /// The grasp path outgrew its buffer before the motion ended.
+    PathBufferFull,
+    /// A motion could not be planned.
+    PlanFailed(PlanError),
+    /// The command generator produced a non-finite set-point.
+    NonFiniteCommand,
+}
+
+impl StopReason {
+    /// Stable numeric code of the reason (logs, wire protocols); the
+    /// payload has its own (e.g. [`crate::monitor::Limit::code`]).
+    pub const fn code(&self) -> u16 {
+        match self {
+            StopReason::Monitor(_) => 1,
+            StopReason::Operator => 2,
+            StopReason::EstimationFailed(_) => 3,
+            StopReason::ModelRejected(_) => 4,
+            StopReason::PathBufferFull => 5,
+            StopReason::PlanFailed(_) => 6,
+            StopReason::NonFiniteCommand => 7,
+        }
+    }
+}
+
 impl StopReason {
     /// The stop category of this cause (the table of the module docs).
     pub const fn category(&self) -> StopCategory {
@@ -129,19 +167,6 @@ impl StopReason {
                 | Limit::ElbowFlexion
                 | Limit::ModelMismatch => StopCategory::Hold,
             },
-        }
-    }
-}
-
-impl Cause {
-    /// The stop category of a transition into SafeStop with this cause (a
-    /// stop request is the operator's stop); `None` for a cause that never
-    /// stops.
-    pub const fn stop_category(&self) -> Option<StopCategory> {
-        match self {
-            Cause::Stop(reason) => Some(reason.category()),
-            Cause::Request(Request::Stop) => Some(StopReason::Operator.category()),
-            Cause::Request(_) | Cause::ModelValidated => None,
         }
     }
 }

@@ -6,8 +6,8 @@
 //! is visible, never silent.
 
 use crate::lift::LiftEnd;
-use crate::state::{Refusal, Request};
-use crate::state::{StateKind, StopReason};
+use crate::state::{Refusal, Request, StateKind};
+use crate::stop::{StopCategory, StopReason};
 use heapless::Deque;
 
 /// Events kept before the oldest is dropped.
@@ -81,5 +81,18 @@ impl Trace {
     /// Events dropped because the trace was full (saturating).
     pub fn dropped(&self) -> u32 {
         self.dropped
+    }
+}
+
+impl Cause {
+    /// The stop category of a transition into SafeStop with this cause (a
+    /// stop request is the operator's stop); `None` for a cause that never
+    /// stops.
+    pub const fn stop_category(&self) -> Option<StopCategory> {
+        match self {
+            Cause::Stop(reason) => Some(reason.category()),
+            Cause::Request(Request::Stop) => Some(StopReason::Operator.category()),
+            Cause::Request(_) | Cause::ModelValidated => None,
+        }
     }
 }

@@ -6,16 +6,17 @@ mod support {
 }
 
 use limb_kernel::arm::elbow_from_grasp;
+use limb_kernel::config::ValidationLimits;
 use limb_kernel::estimation::online::{OnlineEstimator, OnlinePhase};
 use limb_kernel::estimation::outlier::OUTLIER_REACH;
-use limb_kernel::estimation::refine::{Progress, ITERATIONS, SAMPLES_PER_STEP};
+use limb_kernel::estimation::refine::{Progress, Refinement, ITERATIONS, SAMPLES_PER_STEP};
 use limb_kernel::estimation::{estimate_arm, EstimateError, Method};
 use limb_kernel::estimation::{estimate_online, ArmEstimate};
 use limb_kernel::estimation::{DEPARTURE_WINDOW, LIFT_PSI};
 use limb_kernel::geometry::Pose;
 use limb_kernel::path::PathSample;
 use limb_kernel::path::PATH_CAPACITY;
-use limb_kernel::validate::{validate, ValidationLimits};
+use limb_kernel::validate::validate;
 use support::logs;
 
 /// Margin over a figure the READMEs state (README.md, Estimation;
@@ -229,9 +230,8 @@ fn req_time_002_the_refinement_runs_in_bounded_slices() {
     let upper_arm = log.path.len() - split;
     let samples = ITERATIONS * forearm + (ITERATIONS + 1) * upper_arm + forearm + upper_arm;
     let run = |budget: usize| -> (usize, ArmEstimate) {
-        let mut refinement = online
-            .refinement(log.path.len(), [0.0, 0.0])
-            .expect("split found");
+        let mut refinement =
+            Refinement::after(&online, log.path.len(), [0.0, 0.0]).expect("split found");
         for calls in 1..=samples {
             if let Progress::Done(outcome) = refinement.advance(&log.path, budget) {
                 return (calls, outcome.expect("refined"));
@@ -491,7 +491,8 @@ fn skipped_samples_do_not_move_the_online_split() {
 /// online estimate 0.5-0.7 m off.
 #[test]
 fn req_est_005_isolated_outliers_are_left_out_and_counted() {
-    use limb_kernel::validate::{validate, ValidationLimits};
+    use limb_kernel::config::ValidationLimits;
+    use limb_kernel::validate::validate;
     let thrown = |path: &[PathSample], every: usize| -> Vec<PathSample> {
         let mut path = path.to_vec();
         for sample in path.iter_mut().step_by(every) {

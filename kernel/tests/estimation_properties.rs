@@ -1,5 +1,6 @@
 //! Property tests of the estimators and the validator.
 
+use limb_kernel::config::ValidationLimits;
 use limb_kernel::estimation::{
     estimate_arm, fit_circle_geometric, fit_circle_kasa, fit_circle_taubin, hough_circle_chords,
     hough_circle_normals, ArmEstimate, Circle, CircleFitError, FitEvidence, GraspCorrection,
@@ -7,7 +8,7 @@ use limb_kernel::estimation::{
 };
 use limb_kernel::geometry::{Point, Pose, Wrench};
 use limb_kernel::path::PathSample;
-use limb_kernel::validate::{validate, ValidationLimits};
+use limb_kernel::validate::validate;
 use proptest::prelude::*;
 
 /// Tolerance of the LS fits on noise-free arcs [m].
@@ -608,7 +609,7 @@ fn the_moment_fit_states_the_uncertainty_it_has() {
 /// frame S [rad, 0..π], symmetric in the two points.
 #[test]
 fn angle_between_is_the_unsigned_angle_at_the_centre() {
-    use limb_kernel::estimation::online::angle_between;
+    use limb_kernel::geometry::angle_between;
     let centre = Point::new(0.7, -0.4);
     let at =
         |angle: f64, r: f64| Point::new(centre.x + r * angle.cos(), centre.z + r * angle.sin());

@@ -12,9 +12,10 @@ mod support {
     pub mod logs;
 }
 
-use limb_kernel::estimation::online::{JointEnvelope, OnlineEstimator};
+use limb_kernel::estimation::online::OnlineEstimator;
 use limb_kernel::geometry::Point;
 use limb_kernel::lift::{self, LiftCommand, LiftEnd, LiftPhase, ShapedLift};
+use limb_kernel::monitor::joint_limits::JointEnvelope;
 use limb_kernel::monitor::Limit;
 use limb_kernel::motion::{EstimationMotion, SetPoint};
 use limb_kernel::{KernelConfig, PathSample};

@@ -20,9 +20,9 @@
 use criterion::{black_box, Criterion};
 use limb_kernel::arm::JointAngles;
 use limb_kernel::impedance::ImpedanceLaw;
-use limb_kernel::lift::LiftPhase;
 use limb_kernel::motion::SetPoint;
 use limb_kernel::path::is_due;
+use limb_kernel::state::EstimateStage;
 use limb_kernel::State;
 use limb_kernel::{Kernel, PathSample, Request, StateKind};
 use limb_verification::scenario::{
@@ -77,8 +77,8 @@ fn manipulation() -> (Kernel, Vec<PathSample>) {
 /// Which kind of step a kernel is about to take.
 fn step_kind(kernel: &Kernel, frame: &PathSample) -> &'static str {
     match kernel.state() {
-        State::Estimate(estimate) => match estimate.lift().phase() {
-            LiftPhase::Concluding { .. } => "Estimate, concluding (refinement slice)",
+        State::Estimate(estimate) => match estimate.stage() {
+            EstimateStage::Concluding(_) => "Estimate, concluding (refinement slice)",
             _ if is_due(kernel.path().last(), frame.time) => "Estimate, recording a path sample",
             _ => "Estimate, between samples",
         },

@@ -337,7 +337,7 @@ proptest! {
         let config = KernelConfig::default();
         let monitor =
             limb_kernel::monitor::joint_limits::JointLimitMonitor::from_limits(&config.limits);
-        let envelope = limb_kernel::estimation::online::JointEnvelope {
+        let envelope = limb_kernel::monitor::joint_limits::JointEnvelope {
             max_shoulder_elevation: shoulder,
             min_elbow_flexion: elbow,
         };

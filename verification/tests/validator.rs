@@ -1,8 +1,9 @@
 //! REQ-VAL-001: the validator never accepts a model outside its ranges.
 
+use limb_kernel::config::ValidationLimits;
 use limb_kernel::estimation::{ArmEstimate, FitEvidence, Method};
 use limb_kernel::geometry::Point;
-use limb_kernel::validate::{validate, ValidationLimits};
+use limb_kernel::validate::validate;
 use proptest::prelude::*;
 
 fn number() -> impl Strategy<Value = f64> {

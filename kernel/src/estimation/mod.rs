@@ -45,9 +45,9 @@ pub use hough::{
 };
 pub use phase::{detect_phases, detect_phases_from, Phases, DEPARTURE_WINDOW, LIFT_PSI};
 
+use crate::config::ValidationLimits;
 use crate::geometry::Point;
 use crate::path::{PathSample, PATH_CAPACITY};
-use crate::validate::ValidationLimits;
 use core::ops::Range;
 
 /// Which estimator to use.
@@ -492,8 +492,7 @@ pub fn estimate_online(
     for end in 1..=path.len().min(PATH_CAPACITY) {
         online.record(path.get(..end).unwrap_or(&[]), prior);
     }
-    let mut refinement = online
-        .refinement(path.len(), prior.shoulder_rhythm)
+    let mut refinement = refine::Refinement::after(&online, path.len(), prior.shoulder_rhythm)
         .ok_or(EstimateError::UpperArmPhaseTooShort)?;
     // Each call ends at least one pass: 3 ITERATIONS + 3 passes in all.
     for _ in 0..3 * refine::ITERATIONS + 4 {

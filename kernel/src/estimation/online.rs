@@ -43,11 +43,11 @@ use super::outlier::{is_isolated_outlier, OUTLIER_REACH};
 pub use super::phase::{
     DEPARTURE_PERCENT, DEPARTURE_TOLERANCE, DEPARTURE_WINDOW, LIFT_PSI, NOISE_MULTIPLE,
 };
-use super::refine::Refinement;
 use crate::arm::{elbow_from_grasp, pitch_offset_at, JointAngles};
-use crate::geometry::{Point, Pose};
+use crate::config::ValidationLimits;
+use crate::geometry::{angle_between, Point, Pose};
+use crate::monitor::joint_limits::JointEnvelope;
 use crate::path::PathSample;
-use crate::validate::ValidationLimits;
 
 /// Arc a phase must sweep before its moments give a provisional circle
 /// [rad]: below it the radius of a 0.1 mm-noisy arc is uncertain by
@@ -75,17 +75,6 @@ pub enum OnlinePhase {
     Forearm,
     /// Upper arm turning about the shoulder.
     UpperArm,
-}
-
-/// The worst case of the person's joint angles at a pose under the
-/// provisional model [rad].
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize))]
-pub struct JointEnvelope {
-    /// Largest shoulder elevation q1 the model allows.
-    pub max_shoulder_elevation: f64,
-    /// Smallest elbow flexion q2 (most hyperextended) the model allows.
-    pub min_elbow_flexion: f64,
 }
 
 /// The phases found and the provisional fits, updated per sample.
@@ -318,21 +307,6 @@ impl OnlineEstimator {
         }
     }
 
-    /// The refinement of this estimate over a path of `path_len` samples,
-    /// once the upper-arm phase has begun, under shoulder-rhythm prior
-    /// `rhythm` [m/rad] ([`Refinement::new`]).
-    pub fn refinement(&self, path_len: usize, rhythm: [f64; 2]) -> Option<Refinement> {
-        let forearm = self.forearm?;
-        (self.phase == OnlinePhase::UpperArm).then(|| {
-            Refinement::new(
-                forearm.circle,
-                self.lift..self.forearm_end,
-                path_len,
-                rhythm,
-            )
-        })
-    }
-
     /// Worst-case joint angles at measured or commanded pose `pose` under
     /// the provisional model, with the prior l1 range of `prior`; `None`
     /// before a provisional forearm exists or for a non-finite pose.
@@ -371,13 +345,6 @@ impl OnlineEstimator {
             min_elbow_flexion: q.elbow_flexion,
         })
     }
-}
-
-/// Unsigned angle between `a` and `b` seen from `centre` [rad, 0..π].
-pub fn angle_between(centre: Point, a: Point, b: Point) -> f64 {
-    let (ax, az) = (a.x - centre.x, a.z - centre.z);
-    let (bx, bz) = (b.x - centre.x, b.z - centre.z);
-    libm::fabs(libm::atan2(ax * bz - az * bx, ax * bx + az * bz))
 }
 
 #[cfg(test)]

@@ -44,11 +44,11 @@
 
 use super::circle::{Circle, CircleFitError, ResidualBias};
 use super::moments::CircleMoments;
-use super::online::angle_between;
+use super::online::{OnlineEstimator, OnlinePhase};
 use super::outlier::is_isolated_outlier;
 use super::{ArmEstimate, EstimateError, FitEvidence, Method};
 use crate::arm::{elbow_from_grasp, pitch_offset_at};
-use crate::geometry::Point;
+use crate::geometry::{angle_between, Point};
 use crate::path::PathSample;
 use core::ops::Range;
 use nalgebra::{Matrix3, Vector3};
@@ -235,6 +235,16 @@ impl Refinement {
             outliers: (0, 0),
             outcome: None,
         }
+    }
+
+    /// The refinement of `online`'s estimate over a path of `path_len`
+    /// samples, once its upper-arm phase has begun, under shoulder-rhythm
+    /// prior `rhythm` [m/rad] ([`Refinement::new`]); `None` before.
+    pub fn after(online: &OnlineEstimator, path_len: usize, rhythm: [f64; 2]) -> Option<Self> {
+        let forearm = online.forearm()?;
+        let (lift, forearm_end) = online.split();
+        (online.phase() == OnlinePhase::UpperArm)
+            .then(|| Self::new(forearm.circle, lift..forearm_end, path_len, rhythm))
     }
 
     /// The pass running now.

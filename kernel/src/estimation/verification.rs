@@ -274,7 +274,7 @@ pub fn verify_req_est_001_online_estimator_is_total() {
             }
         };
         path[end - 1] = sample;
-        online.record(&path[..end], &crate::validate::ValidationLimits::default());
+        online.record(&path[..end], &crate::config::ValidationLimits::default());
         let (lift, forearm_end) = online.split();
         match online.phase() {
             online::OnlinePhase::Resting => {}

@@ -5,7 +5,6 @@
 use super::{at_most, within, Limit, Verdict, Violation};
 use crate::arm::ArmGeometry;
 use crate::config::{Interval, SafetyLimits};
-use crate::estimation::online::JointEnvelope;
 use crate::geometry::Pose;
 
 /// Joint ranges of the person's arm.
@@ -70,6 +69,17 @@ impl JointLimitMonitor {
 }
 
 /// Proofs of the decidable part of REQ-MON-005 and of REQ-MON-011.
+/// The worst case of the person's joint angles at a pose under the
+/// provisional model [rad].
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct JointEnvelope {
+    /// Largest shoulder elevation q1 the model allows.
+    pub max_shoulder_elevation: f64,
+    /// Smallest elbow flexion q2 (most hyperextended) the model allows.
+    pub min_elbow_flexion: f64,
+}
+
 #[cfg(any(test, kani))]
 mod verification {
     use super::*;

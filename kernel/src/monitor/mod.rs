@@ -14,11 +14,14 @@
 //! | [`force`] | all but SafeStop | the frame and the rate window |
 //! | [`speed`] | Estimate, Manipulate | the rate window |
 //! | [`workspace`] | all but SafeStop (elbow with a model) | the frame |
-//! | [`joint_limits`] | Validated, Manipulate | the validated model |
+//! | [`joint_limits`] | Estimate (the provisional model's joint envelope), Validated, Manipulate | the provisional or validated model |
+//!
+//! [`set::MonitorSet`] holds them all, built once from the safety limits.
 
 pub mod force;
 pub mod joint_limits;
 pub mod rates;
+pub mod set;
 pub mod speed;
 pub mod watchdog;
 pub mod workspace;
