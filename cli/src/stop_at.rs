@@ -219,7 +219,7 @@ mod tests {
     fn the_stop_is_asked_at_t_and_measured_over_the_window() {
         let mut kernel = Kernel::new(KernelConfig::default()).unwrap();
         let mut stop = StopAt::new(Never, Some(0.5));
-        let command = kernel.step(&frame(0.0, 0.0, 0.0), 0.0);
+        let command = kernel.step(Some(&frame(0.0, 0.0, 0.0)), 0.0);
         for (k, z, fz) in [
             (0, 0.01, 3.0),
             (100, 0.01, 3.0),
@@ -252,7 +252,7 @@ mod tests {
     fn the_stop_time_is_session_time() {
         let mut kernel = Kernel::new(KernelConfig::default()).unwrap();
         let mut stop = StopAt::new(Never, Some(0.5));
-        let command = kernel.step(&frame(1000.5, 0.0, 0.0), 1000.5);
+        let command = kernel.step(Some(&frame(1000.5, 0.0, 0.0)), 1000.5);
         for now in [1000.5, 1000.9, 1001.0] {
             stop.before_step(&mut kernel, now, true);
             stop.after_step(&kernel, &frame(now, 0.01, 0.0), &command, now);

@@ -169,7 +169,7 @@ fn starts() -> &'static Starts {
             while i < second * 100 {
                 i += 1;
                 let t = f64::from(i) * FRAME_PERIOD;
-                kernel.step(&scenario::lift_frame(&arm, t), t);
+                kernel.step(Some(&scenario::lift_frame(&arm, t)), t);
             }
             lifting.push(Snapshot::new(kernel.clone(), f64::from(i) * FRAME_PERIOD));
         }

@@ -37,7 +37,7 @@ use crate::impedance::{ImpedanceLaw, Saturation};
 use crate::lift::{holding_pose, LiftPhase};
 use crate::monitor::rates::RateWindow;
 use crate::monitor::set::MonitorSet;
-use crate::monitor::Verdict;
+use crate::monitor::{Limit, Verdict, Violation};
 use crate::motion::SetPoint;
 use crate::path::{GraspPath, PathSample};
 use crate::state::{
@@ -64,6 +64,9 @@ pub struct Kernel {
     path: GraspPath,
     rates: RateWindow,
     last_frame: Option<PathSample>,
+    /// The newest frame the adapter gave, trusted or not: a step without
+    /// a frame (silence) judges it again at its own time.
+    latest: Option<PathSample>,
     last_now: Option<f64>,
     /// The set-point and wrench of the last command before any stop.
     commanded: Option<(SetPoint, Wrench, CommandMode)>,
@@ -124,6 +127,7 @@ impl Kernel {
             state: State::Grasp(Grasp::new()),
             path: GraspPath::new(),
             last_frame: None,
+            latest: None,
             last_now: None,
             commanded: None,
             stop_clock: f64::NAN,
@@ -158,12 +162,29 @@ impl Kernel {
         self.trace.dropped()
     }
 
-    /// One control step: sensor `frame` (frame S) at kernel time `now` [s].
-    /// Never panics; any fault becomes a safe stop in this same step.
-    pub fn step(&mut self, frame: &PathSample, now: f64) -> Command {
-        if let State::SafeStop(stop) = self.state {
-            return self.stopped_step(&stop, frame, now);
+    /// One control step at kernel time `now` [s] on the robot's new sensor
+    /// `frame` (frame S), or on none (`None`: the robot was silent since
+    /// the last step). The kernel alone judges silence: a silent step
+    /// judges the newest frame it was given again at `now`, so past
+    /// `max_sensor_age` the watchdog stops it ([`Limit::StaleSensor`]); a
+    /// kernel that was never given a frame cannot command and stops at
+    /// once (the age infinite). Never panics; any fault becomes a safe
+    /// stop in this same step.
+    ///
+    /// [`Limit::StaleSensor`]: crate::monitor::Limit::StaleSensor
+    pub fn step(&mut self, frame: Option<&PathSample>, now: f64) -> Command {
+        if let Some(frame) = frame {
+            self.latest = Some(*frame);
         }
+        let latest = self.latest;
+        if let State::SafeStop(stop) = self.state {
+            return self.stopped_step(&stop, latest.as_ref(), now);
+        }
+        let Some(frame) = &latest else {
+            let age = self.config.limits.max_sensor_age;
+            let stale = Violation::new(Limit::StaleSensor, f64::INFINITY, age);
+            return self.stop(StopReason::Monitor(stale), now, None);
+        };
         // One place where a step stops (the stop's planning is then one
         // piece of code, for readers and for the proofs alike).
         match self.running_step(frame, now) {
@@ -208,7 +229,7 @@ impl Kernel {
                 );
                 (hold, CommandMode::Hold)
             }
-            Ok(Plan::Stopped(stop)) => return Ok(self.stopped_step(&stop, frame, now)),
+            Ok(Plan::Stopped(stop)) => return Ok(self.stopped_step(&stop, Some(frame), now)),
             Err(reason) => return Err((reason, at)),
         };
         let out = self.law.command(frame.pose, rates.velocity, set_point);
@@ -241,12 +262,15 @@ impl Kernel {
     /// wrench (a hold: the impedance law about the set-point on a finite
     /// frame, else the wrench of the stop), and the frame, when finite and
     /// newer, into the rate window that judges the reset.
-    fn stopped_step(&mut self, stop: &SafeStop, frame: &PathSample, now: f64) -> Command {
-        let finite = frame.time.is_finite() && frame.pose.is_finite() && frame.wrench.is_finite();
-        let newer = self.last_frame.is_none_or(|f| frame.time > f.time);
-        if finite && newer && now.is_finite() && frame.time <= now {
-            self.rates.push(*frame);
-            self.last_frame = Some(*frame);
+    fn stopped_step(&mut self, stop: &SafeStop, frame: Option<&PathSample>, now: f64) -> Command {
+        let finite =
+            frame.filter(|f| f.time.is_finite() && f.pose.is_finite() && f.wrench.is_finite());
+        if let Some(frame) = finite {
+            let newer = self.last_frame.is_none_or(|f| frame.time > f.time);
+            if newer && now.is_finite() && frame.time <= now {
+                self.rates.push(*frame);
+                self.last_frame = Some(*frame);
+            }
         }
         // stop_clock is NaN until the first finite stop step.
         if now.is_finite() && (self.stop_clock.is_nan() || now > self.stop_clock) {
@@ -257,8 +281,8 @@ impl Kernel {
         let mut saturation = Saturation::default();
         // The stop's own wrench was commanded under the limits of its
         // time; limits updated since (allowed in SafeStop) bound it too.
-        let wrench = match (stop.category(), set_point) {
-            (StopCategory::Hold, Some(set_point)) if finite => {
+        let wrench = match (stop.category(), set_point, finite) {
+            (StopCategory::Hold, Some(set_point), Some(frame)) => {
                 let out = self
                     .law
                     .command(frame.pose, self.rates.rates().velocity, set_point);
@@ -778,7 +802,7 @@ mod verification {
         };
         let frame = any_frame_or_at(at, now);
         kani::assume(admit(&frame));
-        let command = kernel.step(&frame, now);
+        let command = kernel.step(Some(&frame), now);
         assert_eq!(command.state, kernel.state().kind());
         assert_eq!(
             check_step(before, &frame, now, &command, &kernel.config().limits),
@@ -921,10 +945,11 @@ mod verification {
     }
 
     /// REQ-SM-006, REQ-CMD-003, REQ-STOP-001: once stopped (a stop
-    /// request in Validated: a hold), steps with any frames and clocks and
-    /// any requests but Reset stay in SafeStop with the same reason and
-    /// category and command the same set-point at rest, the held pose (the
-    /// wrench is the impedance law's about it, within the limits).
+    /// request in Validated: a hold), steps with any frames or none
+    /// (silence) at any clocks, and any requests but Reset, stay in
+    /// SafeStop with the same reason and category and command the same
+    /// set-point at rest, the held pose (the wrench is the impedance law's
+    /// about it, within the limits).
     #[cfg_attr(kani, kani::proof)]
     #[cfg_attr(kani, kani::unwind(22))]
     #[cfg_attr(kani, kani::stub(libm::sqrt, crate::kani_stubs::stub::sqrt))]
@@ -934,7 +959,10 @@ mod verification {
         let limits = kernel.config().limits;
         let reason = kernel.stopped().map(|s| s.reason());
         let check = |kernel: &mut Kernel| {
-            let command = kernel.step(&any_frame(), kani::any());
+            // A frame, or silence (the kernel judges its newest frame).
+            let frame = any_frame();
+            let sensed: bool = kani::any();
+            let command = kernel.step(sensed.then_some(&frame), kani::any());
             assert_eq!(command.check_components(&limits), Ok(()));
             assert_eq!(command.mode, CommandMode::Stop);
             assert_eq!(command.stop, Some(StopCategory::Hold));
@@ -1190,7 +1218,7 @@ mod verification {
                     pose: Pose::new(at.x + dx, at.z + dz, at.psi + dpsi),
                     wrench: Wrench::new(fx, fz, ty),
                 };
-                let command = kernel.step(&frame, now);
+                let command = kernel.step(Some(&frame), now);
                 let limits = kernel.config().limits;
                 prop_assert_eq!(check_step(before, &frame, now, &command, &limits), Ok(()));
                 prop_assert_eq!(command.check(&limits), Ok(()));

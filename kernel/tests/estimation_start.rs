@@ -21,13 +21,13 @@ fn frame(time: f64, pose: Pose) -> PathSample {
 fn req_sm_008_the_estimation_set_point_continues_from_the_hold() {
     let mut kernel = Kernel::new(KernelConfig::default()).unwrap();
     let first = Pose::new(0.0, 0.0, 0.0);
-    let hold = kernel.step(&frame(0.0, first), 0.0);
+    let hold = kernel.step(Some(&frame(0.0, first)), 0.0);
     assert_eq!(hold.set_point.map(|s| s.pose), Some(first));
     // The latest measurement is off the hold by noise; the hold averages
     // it in (REQ-SM-009), by half its deviation.
     let noisy = Pose::new(2e-4, -1.5e-4, 1e-3);
     let held = kernel
-        .step(&frame(0.001, noisy), 0.001)
+        .step(Some(&frame(0.001, noisy)), 0.001)
         .set_point
         .expect("a hold")
         .pose;
@@ -36,7 +36,7 @@ fn req_sm_008_the_estimation_set_point_continues_from_the_hold() {
         kernel.request(Request::StartEstimation, 0.001),
         Ok(StateKind::Estimate)
     );
-    let first = kernel.step(&frame(0.002, noisy), 0.002);
+    let first = kernel.step(Some(&frame(0.002, noisy)), 0.002);
     assert_eq!(first.state, StateKind::Estimate);
     let start = first.set_point.expect("a set-point").pose;
     let step = [start.x - held.x, start.z - held.z, start.psi - held.psi];

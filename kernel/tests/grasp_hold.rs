@@ -57,7 +57,7 @@ proptest! {
                 rest.psi + psi * amplitude,
             );
             let time = k as f64 * PERIOD;
-            let command = kernel.step(&frame(time, pose), time);
+            let command = kernel.step(Some(&frame(time, pose)), time);
             prop_assert_eq!(command.state, StateKind::Grasp);
             let hold = set_point(&command);
             let count = (k + 1).min(GRASP_HOLD_FRAMES as usize);
@@ -97,11 +97,11 @@ fn req_sm_009_one_noisy_first_frame_is_averaged_away() {
     let mut kernel = Kernel::new(KernelConfig::default()).unwrap();
     let rest = Pose::new(0.0, 0.0, 0.0);
     let first = Pose::new(1e-4, -1e-4, 2e-3);
-    kernel.step(&frame(0.0, first), 0.0);
+    kernel.step(Some(&frame(0.0, first)), 0.0);
     let mut hold = first;
     for k in 1..u32::from(GRASP_HOLD_FRAMES) + 10 {
         let time = f64::from(k) * PERIOD;
-        hold = set_point(&kernel.step(&frame(time, rest), time));
+        hold = set_point(&kernel.step(Some(&frame(time, rest)), time));
     }
     assert!(
         distance(hold, rest) <= 2e-3 / f64::from(GRASP_HOLD_FRAMES) * 1.000_001,
@@ -118,17 +118,19 @@ fn req_sm_009_a_reset_keeps_holding_the_stop_set_point() {
     let mut kernel = Kernel::new(KernelConfig::default()).unwrap();
     let mut time = 0.0;
     for _ in 0..10 {
-        kernel.step(&frame(time, Pose::new(0.0, 0.0, 0.0)), time);
+        kernel.step(Some(&frame(time, Pose::new(0.0, 0.0, 0.0))), time);
         time += PERIOD;
     }
     let stopped_at = Pose::new(0.05, 0.12, 0.3);
-    kernel.step(&frame(time, stopped_at), time);
+    kernel.step(Some(&frame(time, stopped_at)), time);
     assert_eq!(kernel.request(Request::Stop, time), Ok(StateKind::SafeStop));
     // The stop's set-point comes to rest and the arm is still (REQ-STOP-003).
     let mut stop = None;
     for _ in 0..1000 {
         time += PERIOD;
-        stop = Some(set_point(&kernel.step(&frame(time, stopped_at), time)));
+        stop = Some(set_point(
+            &kernel.step(Some(&frame(time, stopped_at)), time),
+        ));
     }
     let stop = stop.unwrap();
     assert_eq!(kernel.request(Request::Reset, time), Ok(StateKind::Grasp));
@@ -136,7 +138,7 @@ fn req_sm_009_a_reset_keeps_holding_the_stop_set_point() {
     let sagged = Pose::new(stop.x, stop.z - 0.008, stop.psi);
     for _ in 0..100 {
         time += PERIOD;
-        let command = kernel.step(&frame(time, sagged), time);
+        let command = kernel.step(Some(&frame(time, sagged)), time);
         assert_eq!(command.state, StateKind::Grasp);
         assert_eq!(set_point(&command), stop, "the reset moved the hold");
     }

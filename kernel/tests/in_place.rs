@@ -21,7 +21,7 @@ fn run(kernel: &mut Kernel) -> Vec<String> {
         if i == 100 {
             out.push(format!("{:?}", kernel.request(Request::StartEstimation, t)));
         }
-        out.push(format!("{:?}", kernel.step(&frame(t), t)));
+        out.push(format!("{:?}", kernel.step(Some(&frame(t)), t)));
         while let Some(event) = kernel.pop_event() {
             out.push(format!("{event:?}"));
         }

@@ -48,12 +48,12 @@ fn admitting_the_logged_lift() -> KernelConfig {
 /// keeps feeding the last frame (re-stamped) until the motion is over.
 fn replay(log: &[PathSample], config: KernelConfig) -> Kernel {
     let mut kernel = Kernel::new(config).unwrap();
-    kernel.step(&log[0], log[0].time);
+    kernel.step(Some(&log[0]), log[0].time);
     kernel
         .request(Request::StartEstimation, log[0].time)
         .unwrap();
     for frame in &log[1..] {
-        kernel.step(frame, frame.time);
+        kernel.step(Some(frame), frame.time);
     }
     let mut last = *log.last().unwrap();
     for _ in 0..3000 {
@@ -61,7 +61,7 @@ fn replay(log: &[PathSample], config: KernelConfig) -> Kernel {
             break;
         }
         last.time += 0.01;
-        kernel.step(&last, last.time);
+        kernel.step(Some(&last), last.time);
     }
     kernel
 }

@@ -30,21 +30,21 @@ fn a_repeated_time_stamp_does_not_enter_the_rate_window() {
     let settled = |kernel: &mut Kernel| {
         for k in 0..=steps {
             let time = k as f64 * PERIOD;
-            let command = kernel.step(&frame(time, 0.0), time);
+            let command = kernel.step(Some(&frame(time, 0.0)), time);
             assert_eq!(command.state, StateKind::Grasp, "step {k}");
         }
         steps as f64 * PERIOD
     };
     let mut kernel = Kernel::new(config).unwrap();
     let last = settled(&mut kernel);
-    let repeated = kernel.step(&frame(last, 20.0), last + 0.5 * PERIOD);
+    let repeated = kernel.step(Some(&frame(last, 20.0)), last + 0.5 * PERIOD);
     assert_eq!(repeated.state, StateKind::Grasp);
-    let next = kernel.step(&frame(last + PERIOD, 0.0), last + PERIOD);
+    let next = kernel.step(Some(&frame(last + PERIOD, 0.0)), last + PERIOD);
     assert_eq!(next.state, StateKind::Grasp);
 
     let mut kernel = Kernel::new(config).unwrap();
     let last = settled(&mut kernel);
-    let new = kernel.step(&frame(last + PERIOD, 20.0), last + PERIOD);
+    let new = kernel.step(Some(&frame(last + PERIOD, 20.0)), last + PERIOD);
     assert_eq!(new.state, StateKind::SafeStop);
 }
 
@@ -53,7 +53,7 @@ fn a_repeated_time_stamp_does_not_enter_the_rate_window() {
 #[test]
 fn an_undrained_trace_counts_the_events_it_lost() {
     let mut kernel = Kernel::new(KernelConfig::default()).unwrap();
-    kernel.step(&frame(0.0, 0.0), 0.0);
+    kernel.step(Some(&frame(0.0, 0.0)), 0.0);
     assert_eq!(kernel.dropped_events(), 0);
     let refused = TRACE_CAPACITY + 5;
     for k in 0..refused {
@@ -87,7 +87,7 @@ fn an_arm_at_rest_off_the_origin_reads_zero_speed() {
     };
     let steps = (3.0 * config.limits.rate_window / PERIOD) as usize;
     for k in 0..=steps {
-        let command = kernel.step(&at(k, pose), at(k, pose).time);
+        let command = kernel.step(Some(&at(k, pose)), at(k, pose).time);
         assert_eq!(command.state, StateKind::Grasp);
         // Held where it rests, still: neither spring nor damper pulls.
         let w = command.wrench;
@@ -107,13 +107,13 @@ fn an_arm_at_rest_off_the_origin_reads_zero_speed() {
         other => panic!("{:?}", other.kind()),
     }
     for k in steps + 1..=2 * steps {
-        let command = kernel.step(&at(k, pose), at(k, pose).time);
+        let command = kernel.step(Some(&at(k, pose)), at(k, pose).time);
         assert_eq!(command.state, StateKind::Estimate, "step {k}");
     }
     let k = 2 * steps + 1;
     let dropped = at(k, Pose::new(0.1, 0.29, 0.2));
     assert_eq!(
-        kernel.step(&dropped, dropped.time).state,
+        kernel.step(Some(&dropped), dropped.time).state,
         StateKind::SafeStop
     );
 }

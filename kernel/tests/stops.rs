@@ -24,7 +24,7 @@ fn holding_the_lifted_arm() -> (Kernel, f64) {
     let mut kernel = Kernel::new(KernelConfig::default()).unwrap();
     let mut time = 0.0;
     for _ in 0..200 {
-        let command = kernel.step(&frame(time, LIFTED, WEIGHT), time);
+        let command = kernel.step(Some(&frame(time, LIFTED, WEIGHT)), time);
         assert_eq!(command.state, StateKind::Grasp);
         time += PERIOD;
     }
@@ -34,7 +34,7 @@ fn holding_the_lifted_arm() -> (Kernel, f64) {
 fn steps(kernel: &mut Kernel, time: &mut f64, n: usize, pose: Pose, wrench: Wrench) -> Command {
     let mut last = None;
     for _ in 0..n {
-        last = Some(kernel.step(&frame(*time, pose, wrench), *time));
+        last = Some(kernel.step(Some(&frame(*time, pose, wrench)), *time));
         *time += PERIOD;
     }
     last.unwrap()
@@ -66,11 +66,11 @@ fn req_stop_001_a_stop_request_holds_the_arm() {
 #[test]
 fn req_stop_001_a_stale_sensor_ramps_the_wrench_down() {
     let (mut kernel, mut time) = holding_the_lifted_arm();
-    let before = kernel.step(&frame(time, LIFTED, WEIGHT), time);
+    let before = kernel.step(Some(&frame(time, LIFTED, WEIGHT)), time);
     time += PERIOD;
     // The same frame, 0.2 s later: stale.
     let stale = frame(time - PERIOD, LIFTED, WEIGHT);
-    let first = kernel.step(&stale, time + 0.2);
+    let first = kernel.step(Some(&stale), time + 0.2);
     assert_eq!(first.stop, Some(StopCategory::RampDown));
     match kernel.stopped().unwrap().reason() {
         StopReason::Monitor(v) => assert_eq!(v.limit, Limit::StaleSensor),
@@ -85,7 +85,7 @@ fn req_stop_001_a_stale_sensor_ramps_the_wrench_down() {
     let mut last = first;
     while t < time + 0.2 + RAMP_DOWN_TIME + 0.01 {
         t += PERIOD;
-        let command = kernel.step(&stale, t);
+        let command = kernel.step(Some(&stale), t);
         let (a, b) = (
             last.set_point.unwrap().pose,
             command.set_point.unwrap().pose,
@@ -113,7 +113,10 @@ fn req_stop_003_a_reset_waits_for_a_still_arm() {
         not_still
     );
     // A second cause does not replace the first.
-    let _ = kernel.step(&frame(time, LIFTED, Wrench::new(f64::NAN, 0.0, 0.0)), time);
+    let _ = kernel.step(
+        Some(&frame(time, LIFTED, Wrench::new(f64::NAN, 0.0, 0.0))),
+        time,
+    );
     assert_eq!(kernel.request(Request::Stop, time), Ok(StateKind::SafeStop));
     assert_eq!(kernel.stopped().unwrap().reason(), StopReason::Operator);
     let command = steps(&mut kernel, &mut time, 1000, LIFTED, WEIGHT);
@@ -125,7 +128,7 @@ fn req_stop_003_a_reset_waits_for_a_still_arm() {
             LIFTED.z,
             LIFTED.psi,
         );
-        kernel.step(&frame(time, moved, WEIGHT), time);
+        kernel.step(Some(&frame(time, moved, WEIGHT)), time);
         time += PERIOD;
     }
     assert_eq!(
@@ -147,7 +150,7 @@ fn req_stop_003_a_reset_waits_for_a_still_arm() {
         panic!("not in Grasp")
     };
     assert_eq!(grasp.held(), Some(rest.pose));
-    let command = kernel.step(&frame(time, moved, WEIGHT), time);
+    let command = kernel.step(Some(&frame(time, moved, WEIGHT)), time);
     assert_eq!(
         command.set_point,
         Some(rest),
@@ -198,7 +201,7 @@ fn req_stop_001_a_stop_wrench_obeys_limits_lowered_before_it() {
     let mut command = None;
     for _ in 0..1000 {
         pose.z += 0.05 / 1000.0;
-        command = Some(kernel.step(&frame(time, pose, WEIGHT), time));
+        command = Some(kernel.step(Some(&frame(time, pose, WEIGHT)), time));
         time += PERIOD;
     }
     let pulled = command.unwrap().wrench.force_magnitude();
@@ -208,11 +211,11 @@ fn req_stop_001_a_stop_wrench_obeys_limits_lowered_before_it() {
     kernel.update_limits(limits).unwrap();
     // A non-finite frame: a ramp-down from the wrench commanded last.
     let nan = frame(time, Pose::new(f64::NAN, pose.z, pose.psi), WEIGHT);
-    let first = kernel.step(&nan, time);
+    let first = kernel.step(Some(&nan), time);
     assert_eq!(first.stop, Some(StopCategory::RampDown));
     assert!(first.wrench.force_magnitude() <= 5.0 + 1e-9, "{first:?}");
     assert!(first.saturation.force, "{first:?}");
     assert_eq!(first.check(&kernel.config().limits), Ok(()));
-    let next = kernel.step(&nan, time + PERIOD);
+    let next = kernel.step(Some(&nan), time + PERIOD);
     assert!(next.wrench.force_magnitude() <= 5.0 + 1e-9, "{next:?}");
 }

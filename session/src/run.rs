@@ -9,7 +9,7 @@
 //!    ([`AlignedClock`]); the stamp reaches the kernel as the robot gave it;
 //! 3. a gap between two robot stamps longer than the kernel's
 //!    `max_sensor_age` is silence on the robot's clock: the kernel is first
-//!    stepped with the old frame at the new time, and its watchdog judges;
+//!    stepped without a frame at the new time, and it judges the silence;
 //! 4. a robot that does not follow commands while the kernel moves the arm
 //!    (Estimate, Manipulate) voids the motion: `Request::Stop`;
 //! 5. the [`Supervisor`] makes its requests, then [`Kernel::step`];
@@ -17,8 +17,10 @@
 //!    command to [`Robot::actuate`];
 //! 7. the session ends when the robot ends or the supervisor is finished.
 //!
-//! A [`Sensed::Silent`] robot steps the kernel with its last frame at the
-//! silent time: past `max_sensor_age` the watchdog trips the safe stop.
+//! A [`Sensed::Silent`] robot steps the kernel without a frame at the
+//! silent time (`Kernel::step(None, now)`): the kernel, not the loop,
+//! judges its newest frame's age, and past `max_sensor_age` its watchdog
+//! trips the safe stop. The loop replays nothing.
 //!
 //! An [`Observer`] sees each frame's step from just before
 //! [`Kernel::step`] to just after it, every kernel step (frames and
@@ -173,7 +175,8 @@ struct Loop {
 
 impl Loop {
     /// One kernel step on `sample` at `now`, counted, hashed and shown to
-    /// `observer` (`stale`: the last frame again).
+    /// `observer` (`stale`: a step without a frame, the robot silent;
+    /// `sample` is then the last frame, which the kernel judges again).
     fn step<R, O>(
         &mut self,
         kernel: &mut Kernel,
@@ -186,7 +189,7 @@ impl Loop {
         R: ?Sized,
         O: Observer<R> + ?Sized,
     {
-        let command = kernel.step(sample, now);
+        let command = kernel.step((!stale).then_some(sample), now);
         self.hash.push(&command);
         self.outcome.steps += 1;
         self.outcome.stale_steps += u64::from(stale);
@@ -233,8 +236,8 @@ impl Loop {
         supervisor.after_step(kernel, sample, command, now);
     }
 
-    /// A step on the last frame at `now` (silence, or a gap in the robot's
-    /// stamps), if there was a frame.
+    /// A step without a frame at `now` (silence, or a gap in the robot's
+    /// stamps), if there was a frame before.
     fn stale_step<R, S, O>(
         &mut self,
         kernel: &mut Kernel,

@@ -63,7 +63,7 @@ fn manipulation() -> (Kernel, Vec<PathSample>) {
             pose: arm.forward(q),
             wrench: LIFT_WRENCH,
         };
-        let command = kernel.step(&frame, now);
+        let command = kernel.step(Some(&frame), now);
         assert_eq!(
             command.state,
             StateKind::Manipulate,
@@ -117,7 +117,7 @@ fn session() -> (Vec<(&'static str, Duration)>, Poised, Poised) {
             concluding = Some((kernel.clone(), frame));
         }
         let start = Instant::now();
-        black_box(kernel.step(black_box(&frame), t));
+        black_box(kernel.step(Some(black_box(&frame)), t));
         times.push((kind, start.elapsed()));
     }
     let t = f64::from(i) * PERIOD;
@@ -133,7 +133,7 @@ fn session() -> (Vec<(&'static str, Duration)>, Poised, Poised) {
         };
         let kind = step_kind(&kernel, &frame);
         let start = Instant::now();
-        black_box(kernel.step(black_box(&frame), now));
+        black_box(kernel.step(Some(black_box(&frame)), now));
         times.push((kind, start.elapsed()));
     }
     (
@@ -168,7 +168,7 @@ fn main() {
         criterion.bench_function(name, |b| {
             b.iter_batched_ref(
                 || kernel.clone(),
-                |k| black_box(k.step(black_box(frame), frame.time)),
+                |k| black_box(k.step(Some(black_box(frame)), frame.time)),
                 criterion::BatchSize::LargeInput,
             )
         });
@@ -182,7 +182,7 @@ fn main() {
                 let n = (left as usize).min(frames.len());
                 let start = Instant::now();
                 for (i, frame) in frames[..n].iter().enumerate() {
-                    black_box(kernel.step(black_box(frame), now(i)));
+                    black_box(kernel.step(Some(black_box(frame)), now(i)));
                 }
                 total += start.elapsed();
                 left -= n as u64;
@@ -211,7 +211,7 @@ fn main() {
         let mut kernel = base.clone();
         for (i, frame) in frames.iter().enumerate() {
             let start = Instant::now();
-            black_box(kernel.step(black_box(frame), now(i)));
+            black_box(kernel.step(Some(black_box(frame)), now(i)));
             samples.push(start.elapsed());
             let start = Instant::now();
             black_box(law.command(

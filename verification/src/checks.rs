@@ -505,7 +505,7 @@ pub fn checked_step(
     let arm = kernel.state().arm().map(|a| *a.geometry());
     let config = *kernel.config();
     let before = kernel.state().kind();
-    let command = kernel.step(frame, now);
+    let command = kernel.step(Some(frame), now);
     check_command(&command, &config)?;
     let reason = kernel.stopped().map(|stop| stop.reason());
     oracle.check_stop_cause(before, reason, frame, now, &config, arm.as_ref())?;

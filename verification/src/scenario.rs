@@ -61,7 +61,7 @@ pub fn lift_frame(arm: &ArmGeometry, t: f64) -> PathSample {
 /// A kernel with the default configuration, fed one resting frame at t = 0.
 pub fn kernel_in_grasp(arm: &ArmGeometry) -> Kernel {
     let mut kernel = Kernel::new(KernelConfig::default()).expect("default config is valid");
-    kernel.step(&lift_frame(arm, 0.0), 0.0);
+    kernel.step(Some(&lift_frame(arm, 0.0)), 0.0);
     kernel
 }
 
@@ -75,7 +75,7 @@ pub fn kernel_after_lift(arm: &ArmGeometry) -> (Kernel, f64) {
     while kernel.state().kind() == StateKind::Estimate && t < LIFT_DURATION {
         i += 1;
         t = f64::from(i) * FRAME_PERIOD;
-        kernel.step(&lift_frame(arm, t), t);
+        kernel.step(Some(&lift_frame(arm, t)), t);
     }
     (kernel, t)
 }

@@ -96,7 +96,7 @@ impl Input {
     /// then the trace events, as Debug text: f64 Debug round-trips).
     fn apply(&self, kernel: &mut Kernel) -> Vec<String> {
         let mut out = vec![match self {
-            Input::Step(frame, now) => format!("{:?}", kernel.step(frame, *now)),
+            Input::Step(frame, now) => format!("{:?}", kernel.step(Some(frame), *now)),
             Input::Request(request, now) => format!("{:?}", kernel.request(*request, *now)),
         }];
         while let Some(event) = kernel.pop_event() {

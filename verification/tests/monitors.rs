@@ -36,7 +36,10 @@ fn req_mon_003_fast_grasp_point_stops() {
         let mut kernel = estimating();
         for i in 1..=20 {
             let t = f64::from(i) * 0.01;
-            kernel.step(&frame(t, Pose::new(vx * t, vz * t, 0.0), LIFT_WRENCH), t);
+            kernel.step(
+                Some(&frame(t, Pose::new(vx * t, vz * t, 0.0), LIFT_WRENCH)),
+                t,
+            );
         }
         assert_eq!(stop_limit(&kernel), Some(Limit::Speed), "({vx}, {vz})");
         // A reset waits for the stop's set-point at rest and a still arm
@@ -44,13 +47,13 @@ fn req_mon_003_fast_grasp_point_stops() {
         let stopped = Pose::new(vx * 0.2, vz * 0.2, 0.0);
         for i in 21..=200 {
             let t = f64::from(i) * 0.01;
-            kernel.step(&frame(t, stopped, LIFT_WRENCH), t);
+            kernel.step(Some(&frame(t, stopped, LIFT_WRENCH)), t);
         }
         kernel.request(Request::Reset, 2.0).unwrap();
         let elsewhere = Pose::new(0.1, 0.05, 0.0);
-        kernel.step(&frame(2.01, elsewhere, LIFT_WRENCH), 2.01);
+        kernel.step(Some(&frame(2.01, elsewhere, LIFT_WRENCH)), 2.01);
         kernel.request(Request::StartEstimation, 2.01).unwrap();
-        kernel.step(&frame(2.02, elsewhere, LIFT_WRENCH), 2.02);
+        kernel.step(Some(&frame(2.02, elsewhere, LIFT_WRENCH)), 2.02);
         assert_eq!(kernel.state().kind(), StateKind::Estimate, "({vx}, {vz})");
     }
 }
@@ -63,11 +66,11 @@ fn req_mon_002_force_rate_jump_stops() {
     // A full rate window (50 ms) of a steady force, then a 30 N jump.
     for i in 1..=6 {
         let t = f64::from(i) * 0.01;
-        kernel.step(&frame(t, Pose::default(), Wrench::ZERO), t);
+        kernel.step(Some(&frame(t, Pose::default(), Wrench::ZERO)), t);
     }
     assert_eq!(stop_limit(&kernel), None);
     kernel.step(
-        &frame(0.07, Pose::default(), Wrench::new(30.0, 0.0, 0.0)),
+        Some(&frame(0.07, Pose::default(), Wrench::new(30.0, 0.0, 0.0))),
         0.07,
     );
     assert_eq!(stop_limit(&kernel), Some(Limit::ForceRate));
@@ -91,10 +94,62 @@ fn req_mon_006_stale_reversed_and_clock_faults_stop() {
     for (name, steps, limit) in cases {
         let mut kernel = estimating();
         for (time, now) in steps {
-            kernel.step(&frame(time, Pose::default(), LIFT_WRENCH), now);
+            kernel.step(Some(&frame(time, Pose::default(), LIFT_WRENCH)), now);
         }
         assert_eq!(stop_limit(&kernel), Some(limit), "{name}");
     }
+}
+
+/// REQ-MON-006: the kernel alone judges silence. A step without a frame
+/// within `max_sensor_age` of the newest frame gives the command a step
+/// on that frame again would (same state, set-point and wrench), and past
+/// it stops the kernel as a stale sensor with the frame's age; a kernel
+/// never given a frame stops on a silent step, the age infinite.
+#[test]
+fn req_mon_006_silence_is_judged_by_the_kernel() {
+    let max_age = limb_kernel::KernelConfig::default().limits.max_sensor_age;
+    let last = frame(0.01, Pose::default(), LIFT_WRENCH);
+    let (mut silent, mut replayed) = (estimating(), estimating());
+    silent.step(Some(&last), last.time);
+    replayed.step(Some(&last), last.time);
+    let within = last.time + 0.5 * max_age;
+    assert_eq!(
+        silent.step(None, within),
+        replayed.step(Some(&last), within)
+    );
+    assert_eq!(silent.state().kind(), StateKind::Estimate);
+
+    let past = last.time + 2.0 * max_age;
+    let command = silent.step(None, past);
+    assert_eq!(command.state, StateKind::SafeStop);
+    match silent.state() {
+        State::SafeStop(stop) => match stop.reason() {
+            StopReason::Monitor(v) => {
+                assert_eq!(v.limit, Limit::StaleSensor);
+                assert!((v.value - 2.0 * max_age).abs() < 1e-12, "age {}", v.value);
+            }
+            other => panic!("stopped for {other:?}"),
+        },
+        other => panic!("not stopped: {other:?}"),
+    }
+
+    let mut never = never_sensed();
+    never.step(None, 0.0);
+    match never.state() {
+        State::SafeStop(stop) => match stop.reason() {
+            StopReason::Monitor(v) => {
+                assert_eq!(v.limit, Limit::StaleSensor);
+                assert_eq!(v.value, f64::INFINITY);
+            }
+            other => panic!("stopped for {other:?}"),
+        },
+        other => panic!("not stopped: {other:?}"),
+    }
+}
+
+/// A kernel in Grasp that was never given a frame.
+fn never_sensed() -> Kernel {
+    Kernel::new(limb_kernel::KernelConfig::default()).expect("default configuration")
 }
 
 /// REQ-MON-008: the nominal synthetic lift trips no monitor and ends
@@ -115,12 +170,12 @@ fn req_mon_012_a_set_point_outside_the_workspace_stops() {
     config.limits.workspace_z.high = 0.003;
     let mut kernel = Kernel::new(config).unwrap();
     let rest = Pose::default();
-    kernel.step(&frame(0.0, rest, Wrench::ZERO), 0.0);
+    kernel.step(Some(&frame(0.0, rest, Wrench::ZERO)), 0.0);
     kernel.request(Request::StartEstimation, 0.0).unwrap();
     let mut highest = f64::NEG_INFINITY;
     for i in 1..=3000 {
         let t = f64::from(i) * 0.001;
-        let c = kernel.step(&frame(t, rest, Wrench::ZERO), t);
+        let c = kernel.step(Some(&frame(t, rest, Wrench::ZERO)), t);
         highest = highest.max(c.set_point.map_or(f64::NEG_INFINITY, |s| s.pose.z));
         if kernel.state().kind() == StateKind::SafeStop {
             break;

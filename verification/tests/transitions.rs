@@ -39,7 +39,7 @@ fn kernel_in(state: StateKind) -> (Kernel, f64) {
             let rest = lift_frame(&arm, 0.0);
             for i in 1..=1000 {
                 let time = f64::from(i) * 1e-3;
-                kernel.step(&PathSample { time, ..rest }, time);
+                kernel.step(Some(&PathSample { time, ..rest }), time);
             }
             (kernel, 1.0)
         }
@@ -172,11 +172,11 @@ fn req_sm_003_target_outside_the_workspace_is_refused() {
     assert_eq!(kernel.state().kind(), StateKind::Validated);
     // The held arm is inside the narrowed box: the next step holds.
     let command = kernel.step(
-        &limb_kernel::PathSample {
+        Some(&limb_kernel::PathSample {
             time: t + 0.01,
             pose: hold,
             wrench: limb_verification::scenario::LIFT_WRENCH,
-        },
+        }),
         t + 0.01,
     );
     assert_eq!(command.state, StateKind::Validated);
@@ -250,7 +250,10 @@ fn req_sm_007_limits_change_only_while_held_and_only_when_valid() {
         time: t + 0.01,
         ..frame
     };
-    assert_eq!(kernel.step(&next, t + 0.01).state, StateKind::SafeStop);
+    assert_eq!(
+        kernel.step(Some(&next), t + 0.01).state,
+        StateKind::SafeStop
+    );
 }
 
 /// REQ-CFG-001: a limit update beyond the ceilings is refused with the

@@ -374,7 +374,7 @@ fn another_loop_can_attach_the_supervision_hooks() {
         let now = origin + epoch.elapsed().as_secs_f64();
         supervision.before_step(&mut kernel, now, true);
         let frame = lift.frame(now);
-        let command = kernel.step(&frame, now);
+        let command = kernel.step(Some(&frame), now);
         supervision.after_step(&kernel, &frame, &command, now);
         let wait = Duration::from_millis(5);
         if let Ok(found) = supervisor.wait_ack(|a| a.sequence == Some(sequence), wait) {
@@ -408,7 +408,7 @@ fn a_flood_of_samples_does_not_crowd_out_an_ack() {
         }
         let now = a.lift.origin() + f64::from(round) * 1e-3;
         for _ in 0..2_000 {
-            let command = a.kernel.step(&frame, now);
+            let command = a.kernel.step(Some(&frame), now);
             a.supervision.after_step(&a.kernel, &frame, &command, now);
         }
         a.supervision.before_step(&mut a.kernel, now, true);

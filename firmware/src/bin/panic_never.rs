@@ -70,7 +70,7 @@ fn main() -> ! {
         if let Some(request) = any_request() {
             let _ = black_box(kernel.request(request, any()));
         }
-        black_box(kernel.step(&frame, any()));
+        black_box(kernel.step(Some(&frame), any()));
         while let Some(event) = kernel.pop_event() {
             black_box(event);
         }
