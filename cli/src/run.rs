@@ -201,7 +201,7 @@ pub struct SessionReport {
     pub joint_extremes: BTreeMap<String, JointExtremes>,
     /// Largest measured interaction force |(fx, fz)| over the session [N].
     pub max_force_n: f64,
-    /// FNV-1a hash of every command issued, hex (`limb_session::digest::CommandHash`).
+    /// FNV-1a hash of every command issued, hex (`limb_session::command_hash::CommandHash`).
     pub command_hash: String,
     /// The session in the canonical text of `--digest`.
     #[serde(skip)]

@@ -31,6 +31,7 @@
 #![forbid(unsafe_code)]
 
 pub mod clock;
+pub mod command_hash;
 pub mod digest;
 #[cfg(feature = "std")]
 pub mod log;

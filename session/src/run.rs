@@ -29,7 +29,7 @@
 //! instructions. Nothing the observer does changes the session.
 
 use crate::clock::AlignedClock;
-use crate::digest::CommandHash;
+use crate::command_hash::CommandHash;
 use crate::operator::{completes_session, FittedModel};
 use crate::robot::{Frame, Robot, Sensed};
 use crate::supervisor::Supervisor;
