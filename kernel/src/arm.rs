@@ -429,6 +429,7 @@ mod tests {
 mod verification {
     use super::*;
     use crate::kani_inputs::{any_pose, FOREARM, HOLD, SHOULDER, UPPER_ARM};
+    use crate::kani_stubs::libm_stubbed;
     #[cfg(not(kani))]
     use limb_kani_stand_in as kani;
 
@@ -439,7 +440,7 @@ mod verification {
     /// REQ-VAL-001: an arm is built exactly from finite values with
     /// positive lengths, for any lengths and shoulder.
     #[cfg_attr(kani, kani::proof)]
-    pub fn verify_req_val_001_arm_geometry_needs_finite_positive_lengths() {
+    pub(super) fn verify_req_val_001_arm_geometry_needs_finite_positive_lengths() {
         let (l1, l2): (f64, f64) = (kani::any(), kani::any());
         let shoulder = Point::new(kani::any(), kani::any());
         let arm = ArmGeometry::new(l1, l2, shoulder);
@@ -456,63 +457,58 @@ mod verification {
         );
     }
 
-    /// REQ-MON-005: the pose inverse kinematics of any measured pose is an
-    /// answer with a non-negative residual and angles that are not NaN, or
-    /// a typed error (NaN and infinities included).
-    #[cfg_attr(kani, kani::proof)]
-    #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
-    #[cfg_attr(kani, kani::stub(libm::atan2, crate::kani_stubs::stub::atan2))]
-    #[cfg_attr(kani, kani::stub(libm::sin, crate::kani_stubs::stub::sin))]
-    #[cfg_attr(kani, kani::stub(libm::cos, crate::kani_stubs::stub::cos))]
-    pub fn verify_req_mon_005_pose_inverse_is_total() {
-        let pose = if kani::any() { any_pose() } else { HOLD };
-        match fixed_arm().inverse_from_pose(pose) {
-            Ok((q, residual)) => {
-                assert!(pose.is_finite());
-                assert!(residual >= 0.0, "the residual is negative or NaN");
-                assert!(!q.shoulder_elevation.is_nan() && !q.elbow_flexion.is_nan());
-                kani::cover!(true, "pose inverse: answers");
-            }
-            Err(e) => {
-                assert!(e == KinematicsError::NonFinite || e == KinematicsError::AtShoulder);
-                assert!(pose.is_finite() || e == KinematicsError::NonFinite);
-                kani::cover!(true, "pose inverse: refuses");
+    libm_stubbed! { [hypot, atan2, sin, cos]
+        /// REQ-MON-005: the pose inverse kinematics of any measured pose is an
+        /// answer with a non-negative residual and angles that are not NaN, or
+        /// a typed error (NaN and infinities included).
+        #[cfg_attr(kani, kani::proof)]
+        pub(super) fn verify_req_mon_005_pose_inverse_is_total() {
+            let pose = if kani::any() { any_pose() } else { HOLD };
+            match fixed_arm().inverse_from_pose(pose) {
+                Ok((q, residual)) => {
+                    assert!(pose.is_finite());
+                    assert!(residual >= 0.0, "the residual is negative or NaN");
+                    assert!(!q.shoulder_elevation.is_nan() && !q.elbow_flexion.is_nan());
+                    kani::cover!(true, "pose inverse: answers");
+                }
+                Err(e) => {
+                    assert!(e == KinematicsError::NonFinite || e == KinematicsError::AtShoulder);
+                    assert!(pose.is_finite() || e == KinematicsError::NonFinite);
+                    kani::cover!(true, "pose inverse: refuses");
+                }
             }
         }
     }
 
-    /// REQ-SM-003: the point inverse kinematics (manipulation targets) of
-    /// any grasp point, on either branch, is a pair of angles that are not
-    /// NaN or a typed error.
-    #[cfg_attr(kani, kani::proof)]
-    #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
-    #[cfg_attr(kani, kani::stub(libm::atan2, crate::kani_stubs::stub::atan2))]
-    #[cfg_attr(kani, kani::stub(libm::acos, crate::kani_stubs::stub::acos))]
-    #[cfg_attr(kani, kani::stub(libm::sin, crate::kani_stubs::stub::sin))]
-    #[cfg_attr(kani, kani::stub(libm::cos, crate::kani_stubs::stub::cos))]
-    pub fn verify_req_sm_003_point_inverse_is_total() {
-        let grasp = if kani::any() {
-            Point::new(kani::any(), kani::any())
-        } else {
-            HOLD.point()
-        };
-        let branch = if kani::any() {
-            ElbowBranch::Flexed
-        } else {
-            ElbowBranch::Hyperextended
-        };
-        match fixed_arm().inverse_from_point(grasp, branch) {
-            Ok(q) => {
-                assert!(grasp.is_finite());
-                assert!(!q.shoulder_elevation.is_nan() && !q.elbow_flexion.is_nan());
-                kani::cover!(true, "point inverse: answers");
-            }
-            Err(e) => {
-                assert!(grasp.is_finite() || e == KinematicsError::NonFinite);
-                kani::cover!(
-                    e == KinematicsError::OutOfReach,
-                    "point inverse: out of reach"
-                );
+    libm_stubbed! { [hypot, atan2, acos, sin, cos]
+        /// REQ-SM-003: the point inverse kinematics (manipulation targets) of
+        /// any grasp point, on either branch, is a pair of angles that are not
+        /// NaN or a typed error.
+        #[cfg_attr(kani, kani::proof)]
+        pub(super) fn verify_req_sm_003_point_inverse_is_total() {
+            let grasp = if kani::any() {
+                Point::new(kani::any(), kani::any())
+            } else {
+                HOLD.point()
+            };
+            let branch = if kani::any() {
+                ElbowBranch::Flexed
+            } else {
+                ElbowBranch::Hyperextended
+            };
+            match fixed_arm().inverse_from_point(grasp, branch) {
+                Ok(q) => {
+                    assert!(grasp.is_finite());
+                    assert!(!q.shoulder_elevation.is_nan() && !q.elbow_flexion.is_nan());
+                    kani::cover!(true, "point inverse: answers");
+                }
+                Err(e) => {
+                    assert!(grasp.is_finite() || e == KinematicsError::NonFinite);
+                    kani::cover!(
+                        e == KinematicsError::OutOfReach,
+                        "point inverse: out of reach"
+                    );
+                }
             }
         }
     }

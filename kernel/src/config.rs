@@ -357,7 +357,7 @@ mod verification {
     /// REQ-CFG-001: what an accepted set of limits must satisfy: every
     /// scalar positive (the table tolerance not negative) and at most its
     /// ceiling, every range non-empty and inside the widest range.
-    pub fn check_within_ceilings(l: &SafetyLimits) -> Result<(), &'static str> {
+    pub(super) fn check_within_ceilings(l: &SafetyLimits) -> Result<(), &'static str> {
         let c = &SafetyLimits::CEILING;
         let scalars = [
             (l.max_force, c.max_force),
@@ -396,7 +396,7 @@ mod verification {
     /// scalars and 4 ranges (unwind 9).
     #[cfg_attr(kani, kani::proof)]
     #[cfg_attr(kani, kani::unwind(9))]
-    pub fn verify_req_cfg_001_no_limits_beyond_the_ceilings() {
+    pub(super) fn verify_req_cfg_001_no_limits_beyond_the_ceilings() {
         let mut limits = if kani::any() {
             SafetyLimits::CEILING
         } else {

@@ -359,7 +359,7 @@ mod verification {
     /// output `raw` of the same law without wrench limits, same inputs:
     /// [`check_wrench_limit`], [`check_speed_limit`] and
     /// [`check_speed_bound`].
-    pub fn check_saturation(
+    pub(super) fn check_saturation(
         law: &ImpedanceLaw,
         inputs_finite: bool,
         raw: &ImpedanceOutput,
@@ -376,7 +376,7 @@ mod verification {
     /// limits; whatever differs from the unlimited wrench flagged; a
     /// non-finite input (`inputs_finite` false) flagged and the wrench
     /// zeroed.
-    pub fn check_wrench_limit(
+    pub(super) fn check_wrench_limit(
         law: &ImpedanceLaw,
         inputs_finite: bool,
         raw: &ImpedanceOutput,
@@ -431,7 +431,7 @@ mod verification {
     /// faster is arithmetic (a product's magnitude against its factor's),
     /// which no solver decides here in 10 min: [`check_speed_bound`], a
     /// property of the proptest.
-    pub fn check_speed_limit(
+    pub(super) fn check_speed_limit(
         set_point: &SetPoint,
         out: &ImpedanceOutput,
     ) -> Result<(), &'static str> {
@@ -480,7 +480,7 @@ mod verification {
 
     /// REQ-CMD-002: a finite set-point's limited velocity components are
     /// no faster than the asked ones.
-    pub fn check_speed_bound(
+    pub(super) fn check_speed_bound(
         set_point: &SetPoint,
         out: &ImpedanceOutput,
     ) -> Result<(), &'static str> {
@@ -511,7 +511,7 @@ mod verification {
     /// turn. No loop.
     #[cfg_attr(kani, kani::proof)]
     #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
-    pub fn verify_req_cmd_001_wrench_limit_is_saturated_and_flagged() {
+    pub(super) fn verify_req_cmd_001_wrench_limit_is_saturated_and_flagged() {
         let law = default_law();
         let wrench = Wrench::new(kani::any(), kani::any(), kani::any());
         let set_point = SetPoint::hold(Pose::default());
@@ -547,7 +547,7 @@ mod verification {
     /// axes, and per axis over its 5 inputs.
     #[cfg_attr(kani, kani::proof)]
     #[cfg_attr(kani, kani::unwind(6))]
-    pub fn verify_req_cmd_001_law_is_finite_only_on_finite_inputs() {
+    pub(super) fn verify_req_cmd_001_law_is_finite_only_on_finite_inputs() {
         let law = default_law();
         let set_point = any_set_point();
         let (pose, velocity) = (any_pose(), any_pose_rate());
@@ -578,7 +578,7 @@ mod verification {
     #[cfg_attr(kani, kani::proof)]
     #[cfg_attr(kani, kani::unwind(10))]
     #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
-    pub fn verify_req_cmd_002_set_point_speed_is_limited_and_flagged() {
+    pub(super) fn verify_req_cmd_002_set_point_speed_is_limited_and_flagged() {
         let law = default_law();
         let set_point = any_set_point();
         let mut saturation = Saturation::default();

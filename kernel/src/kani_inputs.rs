@@ -20,17 +20,17 @@ use crate::state::Request;
 use crate::validate::{validate, ValidatedArm};
 
 /// Any pose.
-pub fn any_pose() -> Pose {
+pub(crate) fn any_pose() -> Pose {
     Pose::new(kani::any(), kani::any(), kani::any())
 }
 
 /// Any pose rate.
-pub fn any_pose_rate() -> PoseRate {
+pub(crate) fn any_pose_rate() -> PoseRate {
     PoseRate::new(kani::any(), kani::any(), kani::any())
 }
 
 /// Any set-point: pose, velocity and acceleration.
-pub fn any_set_point() -> SetPoint {
+pub(crate) fn any_set_point() -> SetPoint {
     SetPoint {
         pose: any_pose(),
         velocity: any_pose_rate(),
@@ -39,12 +39,12 @@ pub fn any_set_point() -> SetPoint {
 }
 
 /// Any wrench.
-pub fn any_wrench() -> Wrench {
+pub(crate) fn any_wrench() -> Wrench {
     Wrench::new(kani::any(), kani::any(), kani::any())
 }
 
 /// Any sensor frame.
-pub fn any_frame() -> PathSample {
+pub(crate) fn any_frame() -> PathSample {
     PathSample {
         time: kani::any(),
         pose: any_pose(),
@@ -55,7 +55,7 @@ pub fn any_frame() -> PathSample {
 /// Either any frame, or (so that the nominal branch is reached under the
 /// sampling stand-in too) a plausible one: `pose` measured at `time` with
 /// no interaction force. Kani explores both.
-pub fn any_frame_or_at(pose: Pose, time: f64) -> PathSample {
+pub(crate) fn any_frame_or_at(pose: Pose, time: f64) -> PathSample {
     if kani::any() {
         any_frame()
     } else {
@@ -68,7 +68,7 @@ pub fn any_frame_or_at(pose: Pose, time: f64) -> PathSample {
 }
 
 /// Any request, targets included.
-pub fn any_request() -> Request {
+pub(crate) fn any_request() -> Request {
     match kani::any::<u8>() % 6 {
         0 => Request::StartEstimation,
         1 => Request::ApproveManipulation(MANIPULATION_TARGET),
@@ -86,7 +86,7 @@ pub fn any_request() -> Request {
 /// target checks: accepted ([`MANIPULATION_TARGET`]), beyond the joint
 /// limits, not finite. For the proofs about gating, where what any target
 /// does is REQ-SM-003's proof (`verify_req_sm_003_targets_are_checked`).
-pub fn any_request_of_known_targets() -> Request {
+pub(crate) fn any_request_of_known_targets() -> Request {
     match kani::any::<u8>() % 7 {
         0 => Request::StartEstimation,
         1 => Request::ApproveManipulation(MANIPULATION_TARGET),
@@ -105,18 +105,18 @@ pub fn any_request_of_known_targets() -> Request {
 }
 
 /// Upper-arm length l1 of the fixed arm [m].
-pub const UPPER_ARM: f64 = 0.30;
+pub(crate) const UPPER_ARM: f64 = 0.30;
 /// Forearm length l2 of the fixed arm [m].
-pub const FOREARM: f64 = 0.20;
+pub(crate) const FOREARM: f64 = 0.20;
 /// Shoulder of the fixed arm (frame S): extended on the table, the grasp
 /// at the origin [m].
-pub const SHOULDER: Point = Point::new(UPPER_ARM + FOREARM, 0.0);
+pub(crate) const SHOULDER: Point = Point::new(UPPER_ARM + FOREARM, 0.0);
 /// A hold pose of the fixed arm: upper arm vertical (q1 = π/2), elbow
 /// straight (q2 = 0), so the grasp is at (0.5, 0.5) m with psi = π/2.
-pub const HOLD: Pose = Pose::new(0.5, 0.5, core::f64::consts::FRAC_PI_2);
+pub(crate) const HOLD: Pose = Pose::new(0.5, 0.5, core::f64::consts::FRAC_PI_2);
 /// A manipulation target inside the default joint limits and workspace
 /// for the fixed arm [rad].
-pub const MANIPULATION_TARGET: JointAngles = JointAngles {
+pub(crate) const MANIPULATION_TARGET: JointAngles = JointAngles {
     shoulder_elevation: 1.0,
     elbow_flexion: 0.6,
 };
@@ -125,7 +125,7 @@ pub const MANIPULATION_TARGET: JointAngles = JointAngles {
 /// by the real validator from an estimate whose geometry is axis-aligned:
 /// the distances it checks are `hypot(d, 0)`, exact by the stub contract,
 /// so it is accepted under Kani's stubs as under the real libm.
-pub fn validated_arm() -> ValidatedArm {
+pub(crate) fn validated_arm() -> ValidatedArm {
     let estimate = ArmEstimate {
         upper_arm_length: UPPER_ARM,
         forearm_length: FOREARM,

@@ -28,8 +28,30 @@
 
 use core::f64::consts::PI;
 
+/// A harness with the stubs of the libm functions named in brackets, each
+/// replaced by its contract's stub in [`stub`]: one line instead of one
+/// attribute per function on every harness. The stubs apply only under
+/// `cargo kani` (`cfg(kani)`); under `cargo test` the harness is the
+/// plain function the sampling stand-in runs.
+///
+/// ```ignore
+/// libm_stubbed! { [hypot, atan2]
+///     /// REQ-…: what the harness proves.
+///     #[cfg_attr(kani, kani::proof)]
+///     fn harness() { … }
+/// }
+/// ```
+macro_rules! libm_stubbed {
+    ([$($f:ident),+] $(#[$attr:meta])* $vis:vis fn $name:ident() $body:block) => {
+        $(#[$attr])*
+        $(#[cfg_attr(kani, kani::stub(libm::$f, crate::kani_stubs::stub::$f))])+
+        $vis fn $name() $body
+    };
+}
+pub(crate) use libm_stubbed;
+
 /// The contract of `sqrt`: may `r` be `libm::sqrt(x)`?
-pub fn sqrt_contract(x: f64, r: f64) -> bool {
+pub(crate) fn sqrt_contract(x: f64, r: f64) -> bool {
     if x.is_nan() || x < 0.0 {
         r.is_nan()
     } else if x == f64::INFINITY {
@@ -42,7 +64,7 @@ pub fn sqrt_contract(x: f64, r: f64) -> bool {
 }
 
 /// The contract of `hypot`: may `r` be `libm::hypot(x, y)`?
-pub fn hypot_contract(x: f64, y: f64, r: f64) -> bool {
+pub(crate) fn hypot_contract(x: f64, y: f64, r: f64) -> bool {
     let (ax, ay) = (libm::fabs(x), libm::fabs(y));
     if ax == f64::INFINITY || ay == f64::INFINITY {
         r == f64::INFINITY
@@ -70,17 +92,17 @@ fn bounded_trig_contract(x: f64, r: f64, at_zero: f64) -> bool {
 }
 
 /// The contract of `sin`: may `r` be `libm::sin(x)`?
-pub fn sin_contract(x: f64, r: f64) -> bool {
+pub(crate) fn sin_contract(x: f64, r: f64) -> bool {
     bounded_trig_contract(x, r, x)
 }
 
 /// The contract of `cos`: may `r` be `libm::cos(x)`?
-pub fn cos_contract(x: f64, r: f64) -> bool {
+pub(crate) fn cos_contract(x: f64, r: f64) -> bool {
     bounded_trig_contract(x, r, 1.0)
 }
 
 /// The contract of `atan2`: may `r` be `libm::atan2(y, x)`?
-pub fn atan2_contract(y: f64, x: f64, r: f64) -> bool {
+pub(crate) fn atan2_contract(y: f64, x: f64, r: f64) -> bool {
     if x.is_nan() || y.is_nan() {
         r.is_nan()
     } else if y.to_bits() == 0 && x > 0.0 {
@@ -91,7 +113,7 @@ pub fn atan2_contract(y: f64, x: f64, r: f64) -> bool {
 }
 
 /// The contract of `acos`: may `r` be `libm::acos(x)`?
-pub fn acos_contract(x: f64, r: f64) -> bool {
+pub(crate) fn acos_contract(x: f64, r: f64) -> bool {
     if x.is_nan() || !(-1.0..=1.0).contains(&x) {
         r.is_nan()
     } else {
@@ -101,46 +123,46 @@ pub fn acos_contract(x: f64, r: f64) -> bool {
 
 /// Kani stubs: any value the contract allows.
 #[cfg(kani)]
-pub mod stub {
+pub(crate) mod stub {
     use super::*;
 
     /// Stub of `libm::sqrt`.
-    pub fn sqrt(x: f64) -> f64 {
+    pub(crate) fn sqrt(x: f64) -> f64 {
         let r: f64 = kani::any();
         kani::assume(sqrt_contract(x, r));
         r
     }
 
     /// Stub of `libm::hypot`.
-    pub fn hypot(x: f64, y: f64) -> f64 {
+    pub(crate) fn hypot(x: f64, y: f64) -> f64 {
         let r: f64 = kani::any();
         kani::assume(hypot_contract(x, y, r));
         r
     }
 
     /// Stub of `libm::sin`.
-    pub fn sin(x: f64) -> f64 {
+    pub(crate) fn sin(x: f64) -> f64 {
         let r: f64 = kani::any();
         kani::assume(sin_contract(x, r));
         r
     }
 
     /// Stub of `libm::cos`.
-    pub fn cos(x: f64) -> f64 {
+    pub(crate) fn cos(x: f64) -> f64 {
         let r: f64 = kani::any();
         kani::assume(cos_contract(x, r));
         r
     }
 
     /// Stub of `libm::atan2`.
-    pub fn atan2(y: f64, x: f64) -> f64 {
+    pub(crate) fn atan2(y: f64, x: f64) -> f64 {
         let r: f64 = kani::any();
         kani::assume(atan2_contract(y, x, r));
         r
     }
 
     /// Stub of `libm::acos`.
-    pub fn acos(x: f64) -> f64 {
+    pub(crate) fn acos(x: f64) -> f64 {
         let r: f64 = kani::any();
         kani::assume(acos_contract(x, r));
         r

@@ -86,7 +86,7 @@ pub struct Kernel {
 
 /// Time constant of the holding pose's running mean [s]: 50 ms at 1 kHz
 /// averages 50 frames (2.5 mm of force noise → 0.25 mm).
-pub const HOLDING_TIME_CONSTANT: f64 = 0.05;
+pub(crate) const HOLDING_TIME_CONSTANT: f64 = 0.05;
 
 impl Kernel {
     /// A kernel in Grasp with configuration `config`.
@@ -720,6 +720,7 @@ mod verification {
         any_frame, any_frame_or_at, any_request, any_request_of_known_targets, validated_arm, HOLD,
         MANIPULATION_TARGET,
     };
+    use crate::kani_stubs::libm_stubbed;
     use crate::state::Validated;
     #[cfg(not(kani))]
     use limb_kani_stand_in as kani;
@@ -735,7 +736,7 @@ mod verification {
     /// clock or frame, stale or future frame, a force component, the torque
     /// or the grasp point beyond its limit), and, in a state that moves the
     /// arm, a set-point inside the workspace box and above the table.
-    pub fn check_step(
+    pub(super) fn check_step(
         before: StateKind,
         frame: &PathSample,
         now: f64,
@@ -851,141 +852,132 @@ mod verification {
         (kernel, at)
     }
 
-    /// REQ-PANIC-001, REQ-CMD-001, REQ-MON-006, REQ-MON-007: one step from
-    /// Grasp with any frame (at the step's clock or a non-finite one)
-    /// never panics, commands within the limits and stops on any fault in
-    /// the same step.
-    #[cfg_attr(kani, kani::proof)]
-    #[cfg_attr(kani, kani::unwind(12))]
-    #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
-    #[cfg_attr(kani, kani::stub(libm::sqrt, crate::kani_stubs::stub::sqrt))]
-    pub fn verify_req_panic_001_step_from_grasp() {
-        let (kernel, at) = kernel_in(StateKind::Grasp);
-        let command = one_step(kernel, at, 0.0);
-        kani::cover!(command.state == StateKind::Grasp, "grasp step: holds");
-        kani::cover!(command.state == StateKind::SafeStop, "grasp step: stops");
+    libm_stubbed! { [hypot, sqrt]
+        /// REQ-PANIC-001, REQ-CMD-001, REQ-MON-006, REQ-MON-007: one step from
+        /// Grasp with any frame (at the step's clock or a non-finite one)
+        /// never panics, commands within the limits and stops on any fault in
+        /// the same step.
+        #[cfg_attr(kani, kani::proof)]
+        #[cfg_attr(kani, kani::unwind(12))]
+        pub(super) fn verify_req_panic_001_step_from_grasp() {
+            let (kernel, at) = kernel_in(StateKind::Grasp);
+            let command = one_step(kernel, at, 0.0);
+            kani::cover!(command.state == StateKind::Grasp, "grasp step: holds");
+            kani::cover!(command.state == StateKind::SafeStop, "grasp step: stops");
+        }
     }
 
-    /// REQ-PANIC-001, REQ-CMD-001, REQ-MON-006, REQ-MON-007, REQ-MON-012:
-    /// one step during the estimation (the first of a fresh lift: one sample
-    /// recorded into the online estimate, the lift shaped) with any frame
-    /// whose forearm elevation is not past lift-off (`LIFT_PSI`; NaN and
-    /// -∞ included), at the step's clock or a non-finite one, never
-    /// panics, commands within the limits and stops on any fault in the
-    /// same step. A frame past lift-off on the first sample turns the
-    /// online estimate's phase symbolic, and the solver then unrolls every
-    /// later phase's loops (the refinement's included) over a path it
-    /// cannot bound: not decided in 10 min; the lift's later steps are the
-    /// sessions' (proptest `arbitrary_sessions_keep_every_safety_property`).
-    #[cfg_attr(kani, kani::proof)]
-    #[cfg_attr(kani, kani::unwind(12))]
-    #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
-    #[cfg_attr(kani, kani::stub(libm::sqrt, crate::kani_stubs::stub::sqrt))]
-    #[cfg_attr(kani, kani::stub(libm::atan2, crate::kani_stubs::stub::atan2))]
-    #[cfg_attr(kani, kani::stub(libm::sin, crate::kani_stubs::stub::sin))]
-    #[cfg_attr(kani, kani::stub(libm::cos, crate::kani_stubs::stub::cos))]
-    pub fn verify_req_panic_001_step_during_estimation() {
-        let (kernel, at) = kernel_in(StateKind::Estimate);
-        let command = one_step_where(kernel, at, 0.5, |frame| {
-            frame.pose.psi.is_nan() || frame.pose.psi <= crate::estimation::online::LIFT_PSI
-        });
-        kani::cover!(
-            command.state == StateKind::Estimate,
-            "estimate step: tracks"
-        );
-        kani::cover!(command.state == StateKind::SafeStop, "estimate step: stops");
+    libm_stubbed! { [hypot, sqrt, atan2, sin, cos]
+        /// REQ-PANIC-001, REQ-CMD-001, REQ-MON-006, REQ-MON-007, REQ-MON-012:
+        /// one step during the estimation (the first of a fresh lift: one sample
+        /// recorded into the online estimate, the lift shaped) with any frame
+        /// whose forearm elevation is not past lift-off (`LIFT_PSI`; NaN and
+        /// -∞ included), at the step's clock or a non-finite one, never
+        /// panics, commands within the limits and stops on any fault in the
+        /// same step. A frame past lift-off on the first sample turns the
+        /// online estimate's phase symbolic, and the solver then unrolls every
+        /// later phase's loops (the refinement's included) over a path it
+        /// cannot bound: not decided in 10 min; the lift's later steps are the
+        /// sessions' (proptest `arbitrary_sessions_keep_every_safety_property`).
+        #[cfg_attr(kani, kani::proof)]
+        #[cfg_attr(kani, kani::unwind(12))]
+        pub(super) fn verify_req_panic_001_step_during_estimation() {
+            let (kernel, at) = kernel_in(StateKind::Estimate);
+            let command = one_step_where(kernel, at, 0.5, |frame| {
+                frame.pose.psi.is_nan() || frame.pose.psi <= crate::estimation::online::LIFT_PSI
+            });
+            kani::cover!(
+                command.state == StateKind::Estimate,
+                "estimate step: tracks"
+            );
+            kani::cover!(command.state == StateKind::SafeStop, "estimate step: stops");
+        }
     }
 
-    /// REQ-PANIC-001, REQ-CMD-001, REQ-MON-006, REQ-MON-007: one step in
-    /// Validated with any frame (at the step's clock or a non-finite one)
-    /// never panics, commands within the limits and stops on any fault in
-    /// the same step.
-    #[cfg_attr(kani, kani::proof)]
-    #[cfg_attr(kani, kani::unwind(22))]
-    #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
-    #[cfg_attr(kani, kani::stub(libm::sqrt, crate::kani_stubs::stub::sqrt))]
-    #[cfg_attr(kani, kani::stub(libm::atan2, crate::kani_stubs::stub::atan2))]
-    #[cfg_attr(kani, kani::stub(libm::sin, crate::kani_stubs::stub::sin))]
-    #[cfg_attr(kani, kani::stub(libm::cos, crate::kani_stubs::stub::cos))]
-    pub fn verify_req_panic_001_step_in_validated() {
-        let (kernel, at) = kernel_in(StateKind::Validated);
-        let command = one_step(kernel, at, 0.0);
-        kani::cover!(
-            command.state == StateKind::Validated,
-            "validated step: holds"
-        );
-        kani::cover!(
-            command.state == StateKind::SafeStop,
-            "validated step: stops"
-        );
+    libm_stubbed! { [hypot, sqrt, atan2, sin, cos]
+        /// REQ-PANIC-001, REQ-CMD-001, REQ-MON-006, REQ-MON-007: one step in
+        /// Validated with any frame (at the step's clock or a non-finite one)
+        /// never panics, commands within the limits and stops on any fault in
+        /// the same step.
+        #[cfg_attr(kani, kani::proof)]
+        #[cfg_attr(kani, kani::unwind(22))]
+        pub(super) fn verify_req_panic_001_step_in_validated() {
+            let (kernel, at) = kernel_in(StateKind::Validated);
+            let command = one_step(kernel, at, 0.0);
+            kani::cover!(
+                command.state == StateKind::Validated,
+                "validated step: holds"
+            );
+            kani::cover!(
+                command.state == StateKind::SafeStop,
+                "validated step: stops"
+            );
+        }
     }
 
-    /// REQ-PANIC-001, REQ-CMD-001, REQ-MON-006, REQ-MON-007, REQ-MON-012:
-    /// one step while manipulating with any frame (at the step's clock or a
-    /// non-finite one) never panics, commands within the limits and stops
-    /// on any fault in the same step.
-    #[cfg_attr(kani, kani::proof)]
-    #[cfg_attr(kani, kani::unwind(22))]
-    #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
-    #[cfg_attr(kani, kani::stub(libm::sqrt, crate::kani_stubs::stub::sqrt))]
-    #[cfg_attr(kani, kani::stub(libm::atan2, crate::kani_stubs::stub::atan2))]
-    #[cfg_attr(kani, kani::stub(libm::sin, crate::kani_stubs::stub::sin))]
-    #[cfg_attr(kani, kani::stub(libm::cos, crate::kani_stubs::stub::cos))]
-    pub fn verify_req_panic_001_step_while_manipulating() {
-        let (kernel, at) = kernel_in(StateKind::Manipulate);
-        let command = one_step(kernel, at, 0.001);
-        kani::cover!(
-            command.state == StateKind::Manipulate,
-            "manipulate step: tracks"
-        );
-        kani::cover!(
-            command.state == StateKind::SafeStop,
-            "manipulate step: stops"
-        );
+    libm_stubbed! { [hypot, sqrt, atan2, sin, cos]
+        /// REQ-PANIC-001, REQ-CMD-001, REQ-MON-006, REQ-MON-007, REQ-MON-012:
+        /// one step while manipulating with any frame (at the step's clock or a
+        /// non-finite one) never panics, commands within the limits and stops
+        /// on any fault in the same step.
+        #[cfg_attr(kani, kani::proof)]
+        #[cfg_attr(kani, kani::unwind(22))]
+        pub(super) fn verify_req_panic_001_step_while_manipulating() {
+            let (kernel, at) = kernel_in(StateKind::Manipulate);
+            let command = one_step(kernel, at, 0.001);
+            kani::cover!(
+                command.state == StateKind::Manipulate,
+                "manipulate step: tracks"
+            );
+            kani::cover!(
+                command.state == StateKind::SafeStop,
+                "manipulate step: stops"
+            );
+        }
     }
 
-    /// REQ-SM-006, REQ-CMD-003, REQ-STOP-001: once stopped (a stop
-    /// request in Validated: a hold), steps with any frames or none
-    /// (silence) at any clocks, and any requests but Reset, stay in
-    /// SafeStop with the same reason and category and command the same
-    /// set-point at rest, the held pose (the wrench is the impedance law's
-    /// about it, within the limits).
-    #[cfg_attr(kani, kani::proof)]
-    #[cfg_attr(kani, kani::unwind(22))]
-    #[cfg_attr(kani, kani::stub(libm::sqrt, crate::kani_stubs::stub::sqrt))]
-    #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
-    pub fn verify_req_sm_006_safe_stop_is_latched() {
-        let (mut kernel, _) = kernel_in(StateKind::SafeStop);
-        let limits = kernel.config().limits;
-        let reason = kernel.stopped().map(|s| s.reason());
-        let check = |kernel: &mut Kernel| {
-            // A frame, or silence (the kernel judges its newest frame).
-            let frame = any_frame();
-            let sensed: bool = kani::any();
-            let command = kernel.step(sensed.then_some(&frame), kani::any());
-            assert_eq!(command.check_components(&limits), Ok(()));
-            assert_eq!(command.mode, CommandMode::Stop);
-            assert_eq!(command.stop, Some(StopCategory::Hold));
-            assert_eq!(command.set_point, Some(SetPoint::hold(HOLD)));
-            assert_eq!(kernel.state().kind(), StateKind::SafeStop);
-            assert_eq!(kernel.stopped().map(|s| s.reason()), reason);
-            command
-        };
-        let first = check(&mut kernel);
-        // Two rounds: a request, then a step (no loop: nothing to unwind).
-        let request = any_request();
-        kani::assume(request != Request::Reset);
-        let _ = kernel.request(request, kani::any());
-        check(&mut kernel);
-        let request = any_request();
-        kani::assume(request != Request::Reset);
-        let answer = kernel.request(request, kani::any());
-        let last = check(&mut kernel);
-        kani::cover!(answer.is_err(), "latch: a request refused");
-        kani::cover!(
-            first.wrench != last.wrench,
-            "latch: the hold's wrench follows the arm"
-        );
+    libm_stubbed! { [sqrt, hypot]
+        /// REQ-SM-006, REQ-CMD-003, REQ-STOP-001: once stopped (a stop
+        /// request in Validated: a hold), steps with any frames or none
+        /// (silence) at any clocks, and any requests but Reset, stay in
+        /// SafeStop with the same reason and category and command the same
+        /// set-point at rest, the held pose (the wrench is the impedance law's
+        /// about it, within the limits).
+        #[cfg_attr(kani, kani::proof)]
+        #[cfg_attr(kani, kani::unwind(22))]
+        pub(super) fn verify_req_sm_006_safe_stop_is_latched() {
+            let (mut kernel, _) = kernel_in(StateKind::SafeStop);
+            let limits = kernel.config().limits;
+            let reason = kernel.stopped().map(|s| s.reason());
+            let check = |kernel: &mut Kernel| {
+                // A frame, or silence (the kernel judges its newest frame).
+                let frame = any_frame();
+                let sensed: bool = kani::any();
+                let command = kernel.step(sensed.then_some(&frame), kani::any());
+                assert_eq!(command.check_components(&limits), Ok(()));
+                assert_eq!(command.mode, CommandMode::Stop);
+                assert_eq!(command.stop, Some(StopCategory::Hold));
+                assert_eq!(command.set_point, Some(SetPoint::hold(HOLD)));
+                assert_eq!(kernel.state().kind(), StateKind::SafeStop);
+                assert_eq!(kernel.stopped().map(|s| s.reason()), reason);
+                command
+            };
+            let first = check(&mut kernel);
+            // Two rounds: a request, then a step (no loop: nothing to unwind).
+            let request = any_request();
+            kani::assume(request != Request::Reset);
+            let _ = kernel.request(request, kani::any());
+            check(&mut kernel);
+            let request = any_request();
+            kani::assume(request != Request::Reset);
+            let answer = kernel.request(request, kani::any());
+            let last = check(&mut kernel);
+            kani::cover!(answer.is_err(), "latch: a request refused");
+            kani::cover!(
+                first.wrench != last.wrench,
+                "latch: the hold's wrench follows the arm"
+            );
+        }
     }
 
     /// Checks `property` from a state of any kind, with one call site per
@@ -1002,142 +994,133 @@ mod verification {
         }
     }
 
-    /// REQ-SM-005, REQ-SM-002: from any state, any request at any clock
-    /// (its target accepted, beyond the joint limits or not finite: what
-    /// any other target does is REQ-SM-003's proof) reaches Validated or
-    /// Manipulate only from a state that already holds the same validated
-    /// model (Manipulate only from Validated by an approved target), and a
-    /// refusal names the request and the state and changes nothing.
-    #[cfg_attr(kani, kani::proof)]
-    #[cfg_attr(kani, kani::unwind(22))]
-    #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
-    #[cfg_attr(kani, kani::stub(libm::sqrt, crate::kani_stubs::stub::sqrt))]
-    #[cfg_attr(kani, kani::stub(libm::atan2, crate::kani_stubs::stub::atan2))]
-    #[cfg_attr(kani, kani::stub(libm::sin, crate::kani_stubs::stub::sin))]
-    #[cfg_attr(kani, kani::stub(libm::cos, crate::kani_stubs::stub::cos))]
-    pub fn verify_req_sm_005_no_manipulation_without_a_validated_model() {
-        from_any_state(|kind| {
-            let (mut kernel, _) = kernel_in(kind);
-            let before = *kernel.state();
-            let request = any_request_of_known_targets();
-            let result = kernel.request(request, if kani::any() { 0.01 } else { kani::any() });
-            let after = kernel.state();
-            match after.kind() {
-                StateKind::Validated | StateKind::Manipulate => {
-                    assert!(after.arm().is_some());
+    libm_stubbed! { [hypot, sqrt, atan2, sin, cos]
+        /// REQ-SM-005, REQ-SM-002: from any state, any request at any clock
+        /// (its target accepted, beyond the joint limits or not finite: what
+        /// any other target does is REQ-SM-003's proof) reaches Validated or
+        /// Manipulate only from a state that already holds the same validated
+        /// model (Manipulate only from Validated by an approved target), and a
+        /// refusal names the request and the state and changes nothing.
+        #[cfg_attr(kani, kani::proof)]
+        #[cfg_attr(kani, kani::unwind(22))]
+        pub(super) fn verify_req_sm_005_no_manipulation_without_a_validated_model() {
+            from_any_state(|kind| {
+                let (mut kernel, _) = kernel_in(kind);
+                let before = *kernel.state();
+                let request = any_request_of_known_targets();
+                let result = kernel.request(request, if kani::any() { 0.01 } else { kani::any() });
+                let after = kernel.state();
+                match after.kind() {
+                    StateKind::Validated | StateKind::Manipulate => {
+                        assert!(after.arm().is_some());
+                        assert_eq!(
+                            after.arm(),
+                            before.arm(),
+                            "a model appeared without validation"
+                        );
+                    }
+                    _ => {}
+                }
+                if after.kind() == StateKind::Manipulate && before.kind() != StateKind::Manipulate {
+                    assert_eq!(before.kind(), StateKind::Validated);
+                    assert!(matches!(request, Request::ApproveManipulation(_)));
+                }
+                if let Err(refusal) = result {
+                    assert_eq!(*after, before, "a refused request changed the state");
+                    // The request by its kind (a refused target may hold NaN).
                     assert_eq!(
-                        after.arm(),
-                        before.arm(),
-                        "a model appeared without validation"
+                        core::mem::discriminant(&refusal.request),
+                        core::mem::discriminant(&request)
+                    );
+                    assert_eq!(refusal.state, before.kind());
+                }
+                kani::cover!(
+                    before.kind() == StateKind::Validated && after.kind() == StateKind::Manipulate,
+                    "gating: Manipulate approved"
+                );
+                kani::cover!(result.is_err(), "gating: refused");
+            });
+        }
+    }
+
+    libm_stubbed! { [hypot, sqrt, atan2, sin, cos]
+        /// REQ-SM-004: a request at a non-finite or backwards clock is refused
+        /// for an invalid time, except a stop and the reset of a stop.
+        #[cfg_attr(kani, kani::proof)]
+        #[cfg_attr(kani, kani::unwind(22))]
+        pub(super) fn verify_req_sm_004_requests_need_a_sane_clock() {
+            from_any_state(|kind| {
+                let (mut kernel, _) = kernel_in(kind);
+                let kind = kernel.state().kind();
+                let last = 1.0;
+                kernel.last_now = Some(last);
+                // Only clocks the requirement is about, non-finite or before the
+                // last (every one of them can be drawn): a sane clock's request is
+                // judged by the gating proof (REQ-SM-005) and the targets'
+                // (REQ-SM-003).
+                let drawn: f64 = kani::any();
+                let now = if drawn.is_finite() && drawn >= last {
+                    last - drawn
+                } else {
+                    drawn
+                };
+                let request = any_request();
+                let result = kernel.request(request, now);
+                let exempt = request == Request::Stop
+                    || (request == Request::Reset && kind == StateKind::SafeStop);
+                if !exempt {
+                    assert_eq!(
+                        result.map_err(|r| r.reason),
+                        Err(RefusalReason::InvalidTime)
                     );
                 }
-                _ => {}
-            }
-            if after.kind() == StateKind::Manipulate && before.kind() != StateKind::Manipulate {
-                assert_eq!(before.kind(), StateKind::Validated);
-                assert!(matches!(request, Request::ApproveManipulation(_)));
-            }
-            if let Err(refusal) = result {
-                assert_eq!(*after, before, "a refused request changed the state");
-                // The request by its kind (a refused target may hold NaN).
-                assert_eq!(
-                    core::mem::discriminant(&refusal.request),
-                    core::mem::discriminant(&request)
+                kani::cover!(!exempt, "clock: refused");
+                kani::cover!(
+                    exempt && !now.is_finite() && result.is_ok(),
+                    "clock: stop honoured"
                 );
-                assert_eq!(refusal.state, before.kind());
-            }
-            kani::cover!(
-                before.kind() == StateKind::Validated && after.kind() == StateKind::Manipulate,
-                "gating: Manipulate approved"
-            );
-            kani::cover!(result.is_err(), "gating: refused");
-        });
+            });
+        }
     }
 
-    /// REQ-SM-004: a request at a non-finite or backwards clock is refused
-    /// for an invalid time, except a stop and the reset of a stop.
-    #[cfg_attr(kani, kani::proof)]
-    #[cfg_attr(kani, kani::unwind(22))]
-    #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
-    #[cfg_attr(kani, kani::stub(libm::sqrt, crate::kani_stubs::stub::sqrt))]
-    #[cfg_attr(kani, kani::stub(libm::atan2, crate::kani_stubs::stub::atan2))]
-    #[cfg_attr(kani, kani::stub(libm::sin, crate::kani_stubs::stub::sin))]
-    #[cfg_attr(kani, kani::stub(libm::cos, crate::kani_stubs::stub::cos))]
-    pub fn verify_req_sm_004_requests_need_a_sane_clock() {
-        from_any_state(|kind| {
-            let (mut kernel, _) = kernel_in(kind);
-            let kind = kernel.state().kind();
-            let last = 1.0;
-            kernel.last_now = Some(last);
-            // Only clocks the requirement is about, non-finite or before the
-            // last (every one of them can be drawn): a sane clock's request is
-            // judged by the gating proof (REQ-SM-005) and the targets'
-            // (REQ-SM-003).
-            let drawn: f64 = kani::any();
-            let now = if drawn.is_finite() && drawn >= last {
-                last - drawn
-            } else {
-                drawn
-            };
-            let request = any_request();
-            let result = kernel.request(request, now);
-            let exempt = request == Request::Stop
-                || (request == Request::Reset && kind == StateKind::SafeStop);
-            if !exempt {
-                assert_eq!(
-                    result.map_err(|r| r.reason),
-                    Err(RefusalReason::InvalidTime)
+    libm_stubbed! { [hypot, sqrt, atan2, sin, cos]
+        /// REQ-SM-007: new limits are taken only in Grasp, Validated or
+        /// SafeStop and only when the whole configuration passes its check;
+        /// otherwise the configuration is unchanged.
+        #[cfg_attr(kani, kani::proof)]
+        #[cfg_attr(kani, kani::unwind(22))]
+        pub(super) fn verify_req_sm_007_limits_change_only_while_held() {
+            from_any_state(|kind| {
+                let (mut kernel, _) = kernel_in(kind);
+                let before = *kernel.config();
+                let mut limits = before.limits;
+                // Any force limit, speed limit and elbow range (the others follow
+                // the same check); or the defaults, which are valid.
+                if kani::any() {
+                    limits.max_force = kani::any();
+                    limits.max_speed = kani::any();
+                    limits.elbow_flexion = crate::config::Interval::new(kani::any(), kani::any());
+                }
+                let kind = kernel.state().kind();
+                let result = kernel.update_limits(limits);
+                let held = matches!(
+                    kind,
+                    StateKind::Grasp | StateKind::Validated | StateKind::SafeStop
                 );
-            }
-            kani::cover!(!exempt, "clock: refused");
-            kani::cover!(
-                exempt && !now.is_finite() && result.is_ok(),
-                "clock: stop honoured"
-            );
-        });
-    }
-
-    /// REQ-SM-007: new limits are taken only in Grasp, Validated or
-    /// SafeStop and only when the whole configuration passes its check;
-    /// otherwise the configuration is unchanged.
-    #[cfg_attr(kani, kani::proof)]
-    #[cfg_attr(kani, kani::unwind(22))]
-    #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
-    #[cfg_attr(kani, kani::stub(libm::sqrt, crate::kani_stubs::stub::sqrt))]
-    #[cfg_attr(kani, kani::stub(libm::atan2, crate::kani_stubs::stub::atan2))]
-    #[cfg_attr(kani, kani::stub(libm::sin, crate::kani_stubs::stub::sin))]
-    #[cfg_attr(kani, kani::stub(libm::cos, crate::kani_stubs::stub::cos))]
-    pub fn verify_req_sm_007_limits_change_only_while_held() {
-        from_any_state(|kind| {
-            let (mut kernel, _) = kernel_in(kind);
-            let before = *kernel.config();
-            let mut limits = before.limits;
-            // Any force limit, speed limit and elbow range (the others follow
-            // the same check); or the defaults, which are valid.
-            if kani::any() {
-                limits.max_force = kani::any();
-                limits.max_speed = kani::any();
-                limits.elbow_flexion = crate::config::Interval::new(kani::any(), kani::any());
-            }
-            let kind = kernel.state().kind();
-            let result = kernel.update_limits(limits);
-            let held = matches!(
-                kind,
-                StateKind::Grasp | StateKind::Validated | StateKind::SafeStop
-            );
-            let valid = KernelConfig { limits, ..before }.check().is_ok();
-            assert_eq!(result.is_ok(), held && valid);
-            if result.is_ok() {
-                assert_eq!(kernel.config().limits, limits);
-            } else {
-                assert_eq!(*kernel.config(), before);
-            }
-            kani::cover!(result.is_ok(), "limits: taken");
-            kani::cover!(
-                result == Err(LimitUpdateRefusal::NotAllowedInState(StateKind::Manipulate)),
-                "limits: refused while moving"
-            );
-        });
+                let valid = KernelConfig { limits, ..before }.check().is_ok();
+                assert_eq!(result.is_ok(), held && valid);
+                if result.is_ok() {
+                    assert_eq!(kernel.config().limits, limits);
+                } else {
+                    assert_eq!(*kernel.config(), before);
+                }
+                kani::cover!(result.is_ok(), "limits: taken");
+                kani::cover!(
+                    result == Err(LimitUpdateRefusal::NotAllowedInState(StateKind::Manipulate)),
+                    "limits: refused while moving"
+                );
+            });
+        }
     }
 
     #[cfg(test)]

@@ -46,6 +46,9 @@
 
 #![no_std]
 #![forbid(unsafe_code)]
+// The public API is the public modules and the root's re-exports; an item
+// marked `pub` that no user can reach is a mistake (Tock's rule).
+#![deny(unreachable_pub)]
 // Panics are bugs (Tock's rule): no unwrap, expect or panic outside tests.
 // Indexing stays allowed: it is used only on fixed-size arrays and nalgebra
 // vectors with indices bounded by their length, and the panic-freedom
@@ -70,9 +73,9 @@ pub mod impedance;
 mod kani_inputs;
 #[cfg(any(test, kani))]
 mod kani_stubs;
-pub mod kernel;
+mod kernel;
 pub mod lift;
-pub mod linear;
+mod linear;
 pub mod monitor;
 pub mod motion;
 pub mod path;

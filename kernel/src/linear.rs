@@ -17,7 +17,7 @@
 /// Solves `a x = b` for `x`, `a` given row by row (`a[row][column]`).
 /// `None` when the system is singular (a zero on U's diagonal); a system
 /// with non-finite entries gives non-finite `x` or `None`, never a panic.
-pub fn solve<const N: usize>(mut a: [[f64; N]; N], mut b: [f64; N]) -> Option<[f64; N]> {
+pub(crate) fn solve<const N: usize>(mut a: [[f64; N]; N], mut b: [f64; N]) -> Option<[f64; N]> {
     // pivots[i]: the row swapped with row i at step i (i itself: none).
     let mut pivots = [0usize; N];
     for (i, pivot) in pivots.iter_mut().enumerate() {

@@ -804,46 +804,45 @@ mod verification {
     use super::*;
     use crate::config::SafetyLimits;
     use crate::kani_inputs::{validated_arm, HOLD, MANIPULATION_TARGET};
+    use crate::kani_stubs::libm_stubbed;
     use crate::monitor::set::MonitorSet;
     #[cfg(not(kani))]
     use limb_kani_stand_in as kani;
 
-    /// REQ-SM-003: for any target a manipulation plan exists only for
-    /// finite targets whose goal passes the joint-limit and workspace
-    /// checks, and it moves from the hold pose. Unwind 22: the validator
-    /// that makes the fixed arm checks 21 values for finiteness.
-    #[cfg_attr(kani, kani::proof)]
-    #[cfg_attr(kani, kani::unwind(22))]
-    #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
-    #[cfg_attr(kani, kani::stub(libm::atan2, crate::kani_stubs::stub::atan2))]
-    #[cfg_attr(kani, kani::stub(libm::sin, crate::kani_stubs::stub::sin))]
-    #[cfg_attr(kani, kani::stub(libm::cos, crate::kani_stubs::stub::cos))]
-    pub fn verify_req_sm_003_targets_are_checked() {
-        let MonitorSet {
-            joint_limits: joints,
-            workspace,
-            ..
-        } = MonitorSet::from_limits(&SafetyLimits::default());
-        let validated = Validated::holding(validated_arm(), HOLD);
-        let target = if kani::any() {
-            JointAngles {
-                shoulder_elevation: kani::any(),
-                elbow_flexion: kani::any(),
+    libm_stubbed! { [hypot, atan2, sin, cos]
+        /// REQ-SM-003: for any target a manipulation plan exists only for
+        /// finite targets whose goal passes the joint-limit and workspace
+        /// checks, and it moves from the hold pose. Unwind 22: the validator
+        /// that makes the fixed arm checks 21 values for finiteness.
+        #[cfg_attr(kani, kani::proof)]
+        #[cfg_attr(kani, kani::unwind(22))]
+        pub(super) fn verify_req_sm_003_targets_are_checked() {
+            let MonitorSet {
+                joint_limits: joints,
+                workspace,
+                ..
+            } = MonitorSet::from_limits(&SafetyLimits::default());
+            let validated = Validated::holding(validated_arm(), HOLD);
+            let target = if kani::any() {
+                JointAngles {
+                    shoulder_elevation: kani::any(),
+                    elbow_flexion: kani::any(),
+                }
+            } else {
+                MANIPULATION_TARGET
+            };
+            let plan = validated.plan_manipulation(target, 0.05, &joints, &workspace);
+            if let Ok(plan) = plan {
+                assert!(target.is_finite(), "a non-finite target was planned");
+                assert_eq!(plan.motion.start(), HOLD);
+                assert!(plan.motion.goal().is_finite());
             }
-        } else {
-            MANIPULATION_TARGET
-        };
-        let plan = validated.plan_manipulation(target, 0.05, &joints, &workspace);
-        if let Ok(plan) = plan {
-            assert!(target.is_finite(), "a non-finite target was planned");
-            assert_eq!(plan.motion.start(), HOLD);
-            assert!(plan.motion.goal().is_finite());
+            kani::cover!(plan.is_ok(), "target: planned");
+            kani::cover!(
+                matches!(plan, Err(TargetError::JointLimits(_))),
+                "target: outside the joint limits"
+            );
         }
-        kani::cover!(plan.is_ok(), "target: planned");
-        kani::cover!(
-            matches!(plan, Err(TargetError::JointLimits(_))),
-            "target: outside the joint limits"
-        );
     }
 
     /// REQ-SM-006, REQ-SM-009, REQ-STOP-001: a stop from any state
@@ -851,7 +850,7 @@ mod verification {
     /// and the only way out, a reset, leads to Grasp holding the stop's
     /// set-point at rest (none when the stop had none).
     #[cfg_attr(kani, kani::proof)]
-    pub fn verify_req_sm_006_stop_holds_only_a_finite_pose() {
+    pub(super) fn verify_req_sm_006_stop_holds_only_a_finite_pose() {
         let at = if kani::any() {
             Some(Pose::new(kani::any(), kani::any(), kani::any()))
         } else {

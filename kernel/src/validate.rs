@@ -295,7 +295,7 @@ mod verification {
     /// REQ-VAL-001: an accepted model is finite, within every range of
     /// `limits` and consistent with the start pose; a rejection names a
     /// check that indeed fails, with the offending value.
-    pub fn check_verdict(
+    pub(super) fn check_verdict(
         e: &ArmEstimate,
         grasp_start: Point,
         limits: &ValidationLimits,
@@ -443,7 +443,7 @@ mod verification {
     #[cfg_attr(kani, kani::proof)]
     #[cfg_attr(kani, kani::unwind(23))]
     #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
-    pub fn verify_req_val_001_validator_never_accepts_outside_ranges() {
+    pub(super) fn verify_req_val_001_validator_never_accepts_outside_ranges() {
         // Unwind 23: the finiteness check runs over 22 values.
         let estimate = ArmEstimate {
             upper_arm_length: any_or(0.30),

@@ -68,13 +68,24 @@ fn read(path: &str) -> Result<String, String> {
     std::fs::read_to_string(root().join(path)).map_err(|e| format!("{path}: {e}"))
 }
 
+/// `line` without a leading visibility (`pub`, `pub(crate)`,
+/// `pub(super)`, `pub(in …)`).
+fn without_visibility(line: &str) -> &str {
+    match line.strip_prefix("pub") {
+        Some(rest) if rest.starts_with('(') => rest
+            .split_once(')')
+            .map_or(line, |(_, after)| after.trim_start()),
+        Some(rest) if rest.starts_with(' ') => rest.trim_start(),
+        _ => line,
+    }
+}
+
 /// The doc comment and attribute lines directly above `fn name`.
 fn doc_above(text: &str, name: &str) -> Option<String> {
     let lines: Vec<&str> = text.lines().collect();
-    let at = lines.iter().position(|l| {
-        let l = l.trim_start();
-        l.starts_with(&format!("fn {name}(")) || l.starts_with(&format!("pub fn {name}("))
-    })?;
+    let at = lines
+        .iter()
+        .position(|l| without_visibility(l.trim_start()).starts_with(&format!("fn {name}(")))?;
     let mut doc = Vec::new();
     for line in lines[..at].iter().rev() {
         let t = line.trim_start();

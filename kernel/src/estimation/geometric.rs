@@ -24,19 +24,19 @@ use nalgebra::{Matrix3, Vector3};
 /// Scale of the Cauchy loss [m]: 1 mm, ten times the pose noise of
 /// `plant.md` (0.1 mm) and five times the elbow-path noise from the 1 mrad
 /// psi noise over a 0.2 m forearm.
-pub const ROBUST_SCALE: f64 = 1.0e-3;
+pub(super) const ROBUST_SCALE: f64 = 1.0e-3;
 
 /// Cauchy scale of the first iteration [m]: wide enough for coarse
 /// quantisation (4 mm steps), narrow enough that gross outliers (centimetres)
 /// get little weight even when the start's RMS residual is inflated by them.
-pub const INITIAL_SCALE: f64 = 1.0e-2;
+pub(super) const INITIAL_SCALE: f64 = 1.0e-2;
 
 /// The Cauchy scale is at least this many weighted RMS residuals.
-pub const NOISE_MULTIPLE: f64 = 3.0;
+pub(super) const NOISE_MULTIPLE: f64 = 3.0;
 
 /// Gauss–Newton iterations. From an algebraic start within a few mm the step
 /// converges quadratically; 15 leave margin for the reweighting to settle.
-pub const ITERATIONS: usize = 15;
+pub(super) const ITERATIONS: usize = 15;
 
 /// A robust geometric fit.
 #[derive(Clone, Copy, Debug, PartialEq)]

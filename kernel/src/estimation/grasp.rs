@@ -38,17 +38,17 @@ use nalgebra::{SMatrix, SVector};
 
 /// Reweighting rounds of the forearm-pose fit: one plain least-squares
 /// solve, then Cauchy-weighted solves (scale as in [`super::geometric`]).
-pub const POSE_ROUNDS: usize = 4;
+pub(super) const POSE_ROUNDS: usize = 4;
 /// Largest ratio of compliant to rigid RMS residual at which the compliance
 /// is kept (dimensionless).
-pub const COMPLIANCE_GAIN: f64 = 0.5;
+pub(super) const COMPLIANCE_GAIN: f64 = 0.5;
 /// Samples a post-jump stretch needs to count as a slip (1 s at 100 Hz).
 pub const MIN_SLIP_SAMPLES: usize = 100;
 /// Smallest jump that is corrected as a slip [m]: 20 × the position noise.
-pub const MIN_SLIP: f64 = 2.0e-3;
+pub(super) const MIN_SLIP: f64 = 2.0e-3;
 /// Largest RMS residual of the forearm-pose model after the jump for it to
 /// count as a slip [m]: a lifting elbow leaves the model by centimetres.
-pub const SLIP_CONSISTENCY: f64 = 1.0e-3;
+pub(super) const SLIP_CONSISTENCY: f64 = 1.0e-3;
 
 /// Grasp corrections shared by all samples.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

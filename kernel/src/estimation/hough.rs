@@ -48,15 +48,15 @@ use crate::geometry::Point;
 use crate::path::PATH_CAPACITY;
 
 /// Largest radius voted for [m]: the paper's ρ = 500 mm (eq. 17).
-pub const MAX_RADIUS: f64 = 0.5;
+pub(super) const MAX_RADIUS: f64 = 0.5;
 /// Radius cell width [m]: the paper's 1 mm grid (eq. 16).
-pub const CELL: f64 = 1.0e-3;
+pub(super) const CELL: f64 = 1.0e-3;
 /// Number of radius cells: 0..=500 mm.
-pub const BINS: usize = 501;
+pub(super) const BINS: usize = 501;
 /// Half-width of the window the coarse peak is searched with [cells].
-pub const PEAK_HALF_WIDTH: usize = 2;
+pub(super) const PEAK_HALF_WIDTH: usize = 2;
 /// Half-width of the fine averaging window about the peak radius [m].
-pub const FINE_WINDOW: f64 = 2.0e-3;
+pub(super) const FINE_WINDOW: f64 = 2.0e-3;
 /// Most votes one transform casts: n/2 for normals, n ≤
 /// [`PATH_CAPACITY`]; chords cast at most n/3.
 pub const MAX_VOTES: usize = PATH_CAPACITY / 2;

@@ -213,7 +213,11 @@ mod verification {
 
     /// REQ-EST-005: a verdict of "outlier" is given only to a sample with
     /// [`OUTLIER_REACH`] recorded samples on each side.
-    pub fn check_verdict(len: usize, index: usize, outlier: bool) -> Result<(), &'static str> {
+    pub(super) fn check_verdict(
+        len: usize,
+        index: usize,
+        outlier: bool,
+    ) -> Result<(), &'static str> {
         if outlier && (index < OUTLIER_REACH || index + OUTLIER_REACH >= len) {
             return Err("a sample without a full window was judged an outlier");
         }
@@ -227,7 +231,7 @@ mod verification {
     /// longest loops are the sort and the copy of the five-sample window.
     #[cfg_attr(kani, kani::proof)]
     #[cfg_attr(kani, kani::unwind(7))]
-    pub fn verify_req_est_005_outlier_test_is_total() {
+    pub(super) fn verify_req_est_005_outlier_test_is_total() {
         let mut path = [PathSample::default(); SAMPLES];
         for (i, sample) in path.iter_mut().enumerate() {
             // A path moving 1 mm per sample, or any frame.

@@ -29,7 +29,7 @@ pub const LIFT_PSI: f64 = 0.05;
 /// Forearm elevation ending the first guess of phase 1 [rad]. On the six
 /// arms of `plant.md` the elbow lifts at psi ≈ 1.35-1.47 rad; a wrong guess
 /// only costs a round.
-pub const INITIAL_PSI: f64 = 0.5;
+pub(super) const INITIAL_PSI: f64 = 0.5;
 /// Radial residual that counts as having left the phase-1 circle [m]:
 /// 10 × the position noise of `plant.md`.
 pub const DEPARTURE_TOLERANCE: f64 = 1.0e-3;
@@ -42,13 +42,13 @@ pub const DEPARTURE_WINDOW: usize = 50;
 pub const DEPARTURE_PERCENT: usize = 90;
 /// Residual of the last phase-1 sample before the departure [m]: 3σ of the
 /// position noise.
-pub const SETTLED_TOLERANCE: f64 = 0.3e-3;
+pub(super) const SETTLED_TOLERANCE: f64 = 0.3e-3;
 /// On noisier data (e.g. coarse quantisation) the tolerances grow with the
 /// RMS residual of the current fit: departure at this many RMS, settled at
 /// one RMS.
 pub const NOISE_MULTIPLE: f64 = 4.0;
 /// Fit-and-scan rounds; the split is stable after the second on every log.
-pub const ROUNDS: usize = 3;
+pub(super) const ROUNDS: usize = 3;
 
 /// The two phases of the estimation motion, as index ranges of the path.
 #[derive(Clone, Debug, PartialEq, Eq)]

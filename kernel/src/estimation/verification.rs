@@ -35,14 +35,15 @@ use super::outlier;
 use super::*;
 use crate::arm::{ArmGeometry, JointAngles};
 use crate::geometry::Wrench;
+use crate::kani_stubs::libm_stubbed;
 #[cfg(not(kani))]
 use limb_kani_stand_in as kani;
 
 /// Longest path the proof considers [samples].
-pub const N: usize = 24;
+pub(super) const N: usize = 24;
 
 /// The contract of a circle fit's result over `count` points.
-pub fn circle_fit_contract(count: usize, fit: &Result<Circle, CircleFitError>) -> bool {
+pub(super) fn circle_fit_contract(count: usize, fit: &Result<Circle, CircleFitError>) -> bool {
     match fit {
         Ok(circle) => count >= 3 && circle.is_valid(),
         Err(_) => true,
@@ -52,7 +53,7 @@ pub fn circle_fit_contract(count: usize, fit: &Result<Circle, CircleFitError>) -
 /// The contract of the running moments' fit (`CircleMoments::fit`) over
 /// `count` points: an error, or a valid circle of at least 4 points with
 /// finite uncertainties.
-pub fn moment_fit_contract(count: usize, fit: &Result<MomentFit, CircleFitError>) -> bool {
+pub(super) fn moment_fit_contract(count: usize, fit: &Result<MomentFit, CircleFitError>) -> bool {
     match fit {
         Ok(fit) => {
             count >= 4
@@ -67,7 +68,10 @@ pub fn moment_fit_contract(count: usize, fit: &Result<MomentFit, CircleFitError>
 }
 
 /// The contract of the robust fit's result over `count` points.
-pub fn robust_fit_contract(count: usize, fit: &Result<GeometricFit, CircleFitError>) -> bool {
+pub(super) fn robust_fit_contract(
+    count: usize,
+    fit: &Result<GeometricFit, CircleFitError>,
+) -> bool {
     match fit {
         Ok(fit) => {
             circle_fit_contract(count, &Ok(fit.circle)) && fit.noise.is_finite() && fit.noise >= 0.0
@@ -89,7 +93,7 @@ mod stub {
     }
 
     /// Stub of [`fit_circle_kasa`].
-    pub fn fit_circle_kasa<I: Iterator<Item = Point> + Clone>(
+    pub(crate) fn fit_circle_kasa<I: Iterator<Item = Point> + Clone>(
         points: I,
     ) -> Result<Circle, CircleFitError> {
         let count = points.count();
@@ -103,7 +107,7 @@ mod stub {
     }
 
     /// Stub of `CircleMoments::fit`: any result its contract allows.
-    pub fn moment_fit(moments: &CircleMoments) -> Result<MomentFit, CircleFitError> {
+    pub(crate) fn moment_fit(moments: &CircleMoments) -> Result<MomentFit, CircleFitError> {
         let count = moments.count();
         let fit = if kani::any() {
             Ok(MomentFit {
@@ -123,12 +127,12 @@ mod stub {
     /// Stub of [`outlier::is_isolated_outlier`]: either verdict, for any
     /// path and index (the test's own totality is REQ-EST-005's harness,
     /// `verify_req_est_005_outlier_test_is_total`).
-    pub fn any_verdict(_path: &[PathSample], _index: usize) -> bool {
+    pub(crate) fn any_verdict(_path: &[PathSample], _index: usize) -> bool {
         kani::any()
     }
 
     /// Stub of [`PointModel::robust_circle`].
-    pub fn robust_circle(
+    pub(crate) fn robust_circle(
         _model: &PointModel,
         path: &[PathSample],
         range: Range<usize>,
@@ -151,7 +155,7 @@ mod stub {
 /// l2 0.20 m: the first 14 turn the forearm about the resting elbow (psi
 /// 0.06 to 0.5 rad), the rest lift the upper arm (q1 up by 0.06 rad a
 /// sample).
-pub fn short_lift(n: usize) -> [PathSample; N] {
+pub(super) fn short_lift(n: usize) -> [PathSample; N] {
     let arm = ArmGeometry::new(0.30, 0.20, Point::new(0.50, 0.0)).expect("a valid arm");
     let mut path = [PathSample::default(); N];
     for (i, sample) in path.iter_mut().enumerate().take(n) {
@@ -176,131 +180,125 @@ pub fn short_lift(n: usize) -> [PathSample; N] {
     path
 }
 
-/// REQ-EST-001: for any path of up to [`N`] samples — its length, every
-/// forearm elevation and one arbitrary sample (NaN, infinities) anywhere —
-/// the estimator returns a typed error or an estimate whose phases lie in
-/// the path and hold at least [`MIN_PHASE_SAMPLES`] each, with finite
-/// positive lengths; it never panics (indices, windows, subtraction).
-#[cfg_attr(kani, kani::proof)]
-#[cfg_attr(kani, kani::unwind(25))]
-#[cfg_attr(kani, kani::stub(fit_circle_kasa, stub::fit_circle_kasa))]
-#[cfg_attr(kani, kani::stub(PointModel::robust_circle, stub::robust_circle))]
-#[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
-#[cfg_attr(kani, kani::stub(libm::sqrt, crate::kani_stubs::stub::sqrt))]
-#[cfg_attr(kani, kani::stub(libm::atan2, crate::kani_stubs::stub::atan2))]
-#[cfg_attr(kani, kani::stub(libm::sin, crate::kani_stubs::stub::sin))]
-#[cfg_attr(kani, kani::stub(libm::cos, crate::kani_stubs::stub::cos))]
-pub fn verify_req_est_001_estimator_is_total() {
-    let length = usize::from(kani::any::<u8>()) % (N + 1);
-    let mut path = short_lift(N);
-    if kani::any() {
-        // Any forearm elevations: lift-off, the first guess of phase 1
-        // and the phase split anywhere.
-        for sample in path.iter_mut() {
-            sample.pose.psi = kani::any();
+libm_stubbed! { [hypot, sqrt, atan2, sin, cos]
+    /// REQ-EST-001: for any path of up to [`N`] samples — its length, every
+    /// forearm elevation and one arbitrary sample (NaN, infinities) anywhere —
+    /// the estimator returns a typed error or an estimate whose phases lie in
+    /// the path and hold at least [`MIN_PHASE_SAMPLES`] each, with finite
+    /// positive lengths; it never panics (indices, windows, subtraction).
+    #[cfg_attr(kani, kani::proof)]
+    #[cfg_attr(kani, kani::unwind(25))]
+    #[cfg_attr(kani, kani::stub(fit_circle_kasa, stub::fit_circle_kasa))]
+    #[cfg_attr(kani, kani::stub(PointModel::robust_circle, stub::robust_circle))]
+    pub(super) fn verify_req_est_001_estimator_is_total() {
+        let length = usize::from(kani::any::<u8>()) % (N + 1);
+        let mut path = short_lift(N);
+        if kani::any() {
+            // Any forearm elevations: lift-off, the first guess of phase 1
+            // and the phase split anywhere.
+            for sample in path.iter_mut() {
+                sample.pose.psi = kani::any();
+            }
         }
+        if kani::any() {
+            let at = usize::from(kani::any::<u8>()) % N;
+            path[at] = crate::kani_inputs::any_frame();
+        }
+        let path = &path[..length];
+        let result = estimate_arm(path, Method::Ls);
+        if let Ok(estimate) = result {
+            let e = estimate.evidence;
+            assert!(e.forearm_samples >= MIN_PHASE_SAMPLES && e.upper_arm_samples >= MIN_PHASE_SAMPLES);
+            assert!(e.forearm_samples + e.upper_arm_samples <= path.len());
+            assert!(estimate.upper_arm_length.is_finite() && estimate.upper_arm_length > 0.0);
+            assert!(estimate.forearm_length.is_finite() && estimate.forearm_length > 0.0);
+        }
+        kani::cover!(result.is_ok(), "estimator: estimate");
+        kani::cover!(
+            result == Err(EstimateError::ForearmPhaseTooShort),
+            "estimator: phase 1 too short"
+        );
+        kani::cover!(
+            result == Err(EstimateError::NonFiniteSample),
+            "estimator: non-finite sample"
+        );
     }
-    if kani::any() {
-        let at = usize::from(kani::any::<u8>()) % N;
-        path[at] = crate::kani_inputs::any_frame();
-    }
-    let path = &path[..length];
-    let result = estimate_arm(path, Method::Ls);
-    if let Ok(estimate) = result {
-        let e = estimate.evidence;
-        assert!(e.forearm_samples >= MIN_PHASE_SAMPLES && e.upper_arm_samples >= MIN_PHASE_SAMPLES);
-        assert!(e.forearm_samples + e.upper_arm_samples <= path.len());
-        assert!(estimate.upper_arm_length.is_finite() && estimate.upper_arm_length > 0.0);
-        assert!(estimate.forearm_length.is_finite() && estimate.forearm_length > 0.0);
-    }
-    kani::cover!(result.is_ok(), "estimator: estimate");
-    kani::cover!(
-        result == Err(EstimateError::ForearmPhaseTooShort),
-        "estimator: phase 1 too short"
-    );
-    kani::cover!(
-        result == Err(EstimateError::NonFiniteSample),
-        "estimator: non-finite sample"
-    );
 }
 
 /// Samples the online-estimator harness records (the forearm moments lag
 /// [`DEPARTURE_WINDOW`] = 50 samples, so its `Ok` branch — a split and a
 /// provisional upper arm — needs far longer paths: that is the batch
 /// harness's and the session tests' to cover).
-pub const ONLINE_SAMPLES: usize = 4;
+pub(super) const ONLINE_SAMPLES: usize = 4;
 
-/// REQ-EST-001: the kernel's online estimator, fed any path of up to
-/// [`ONLINE_SAMPLES`] samples one at a time (every value any number, NaN
-/// and infinities included), never panics, keeps its split inside the
-/// recorded path and reaches the forearm phase only after a lift-off.
-/// Unwind 12: the harness records 4 samples; a record call loops only when
-/// a forearm phase of 50 judged samples ends; the longest loop is the
-/// configuration check's over 11 positive values (`all_positive`).
-///
-/// Stubbed besides libm, soundly by their contracts: the moments' fit
-/// ([`moment_fit_contract`], checked against the real fit by
-/// `req_est_001_fits_meet_their_stub_contracts`; any fit of the points
-/// counted), so the moments need only count their points
-/// (`CircleMoments::count_finite`), and the outlier test (either verdict).
-/// CBMC's symbolic execution does not see that a few samples never reach
-/// them (the indices are symbolic after the phases merge): with 8 samples
-/// and none of these stubs it spent its 600 s and 11.7 GiB in the outlier
-/// test's medians, the 3 × 3 solve and the sums' products; with them, 600 s
-/// and 4.5 GiB in the solver. 4 samples reach both covers (a lift-off
-/// needs 2) and are decided in under 3 min.
-#[cfg_attr(kani, kani::proof)]
-#[cfg_attr(kani, kani::unwind(12))]
-#[cfg_attr(kani, kani::stub(CircleMoments::fit, stub::moment_fit))]
-#[cfg_attr(kani, kani::stub(CircleMoments::add, CircleMoments::count_finite))]
-#[cfg_attr(kani, kani::stub(outlier::is_isolated_outlier, stub::any_verdict))]
-#[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
-#[cfg_attr(kani, kani::stub(libm::sqrt, crate::kani_stubs::stub::sqrt))]
-#[cfg_attr(kani, kani::stub(libm::atan2, crate::kani_stubs::stub::atan2))]
-#[cfg_attr(kani, kani::stub(libm::sin, crate::kani_stubs::stub::sin))]
-#[cfg_attr(kani, kani::stub(libm::cos, crate::kani_stubs::stub::cos))]
-pub fn verify_req_est_001_online_estimator_is_total() {
-    let mut path = [PathSample::default(); ONLINE_SAMPLES];
-    let mut online = online::OnlineEstimator::new();
-    for end in 1..=ONLINE_SAMPLES {
-        let sample = if kani::any() {
-            crate::kani_inputs::any_frame()
-        } else {
-            // A rising forearm: lift-off under the sampling stand-in too.
-            PathSample {
-                time: end as f64 * 0.01,
-                pose: crate::geometry::Pose::new(0.0, 0.0, end as f64 * 0.02),
-                wrench: Wrench::ZERO,
-            }
-        };
-        path[end - 1] = sample;
-        online.record(&path[..end], &crate::config::ValidationLimits::default());
-        let (lift, forearm_end) = online.split();
-        match online.phase() {
-            online::OnlinePhase::Resting => {}
-            online::OnlinePhase::Forearm => {
-                assert!(lift < end, "lift-off outside the recorded path");
-                assert!(
-                    path[lift].pose.psi > online::LIFT_PSI,
-                    "lift-off below LIFT_PSI"
-                );
-            }
-            online::OnlinePhase::UpperArm => {
-                assert!(
-                    lift <= forearm_end && forearm_end <= end,
-                    "split outside the path"
-                );
+libm_stubbed! { [hypot, sqrt, atan2, sin, cos]
+    /// REQ-EST-001: the kernel's online estimator, fed any path of up to
+    /// [`ONLINE_SAMPLES`] samples one at a time (every value any number, NaN
+    /// and infinities included), never panics, keeps its split inside the
+    /// recorded path and reaches the forearm phase only after a lift-off.
+    /// Unwind 12: the harness records 4 samples; a record call loops only when
+    /// a forearm phase of 50 judged samples ends; the longest loop is the
+    /// configuration check's over 11 positive values (`all_positive`).
+    ///
+    /// Stubbed besides libm, soundly by their contracts: the moments' fit
+    /// ([`moment_fit_contract`], checked against the real fit by
+    /// `req_est_001_fits_meet_their_stub_contracts`; any fit of the points
+    /// counted), so the moments need only count their points
+    /// (`CircleMoments::count_finite`), and the outlier test (either verdict).
+    /// CBMC's symbolic execution does not see that a few samples never reach
+    /// them (the indices are symbolic after the phases merge): with 8 samples
+    /// and none of these stubs it spent its 600 s and 11.7 GiB in the outlier
+    /// test's medians, the 3 × 3 solve and the sums' products; with them, 600 s
+    /// and 4.5 GiB in the solver. 4 samples reach both covers (a lift-off
+    /// needs 2) and are decided in under 3 min.
+    #[cfg_attr(kani, kani::proof)]
+    #[cfg_attr(kani, kani::unwind(12))]
+    #[cfg_attr(kani, kani::stub(CircleMoments::fit, stub::moment_fit))]
+    #[cfg_attr(kani, kani::stub(CircleMoments::add, CircleMoments::count_finite))]
+    #[cfg_attr(kani, kani::stub(outlier::is_isolated_outlier, stub::any_verdict))]
+    pub(super) fn verify_req_est_001_online_estimator_is_total() {
+        let mut path = [PathSample::default(); ONLINE_SAMPLES];
+        let mut online = online::OnlineEstimator::new();
+        for end in 1..=ONLINE_SAMPLES {
+            let sample = if kani::any() {
+                crate::kani_inputs::any_frame()
+            } else {
+                // A rising forearm: lift-off under the sampling stand-in too.
+                PathSample {
+                    time: end as f64 * 0.01,
+                    pose: crate::geometry::Pose::new(0.0, 0.0, end as f64 * 0.02),
+                    wrench: Wrench::ZERO,
+                }
+            };
+            path[end - 1] = sample;
+            online.record(&path[..end], &crate::config::ValidationLimits::default());
+            let (lift, forearm_end) = online.split();
+            match online.phase() {
+                online::OnlinePhase::Resting => {}
+                online::OnlinePhase::Forearm => {
+                    assert!(lift < end, "lift-off outside the recorded path");
+                    assert!(
+                        path[lift].pose.psi > online::LIFT_PSI,
+                        "lift-off below LIFT_PSI"
+                    );
+                }
+                online::OnlinePhase::UpperArm => {
+                    assert!(
+                        lift <= forearm_end && forearm_end <= end,
+                        "split outside the path"
+                    );
+                }
             }
         }
+        kani::cover!(
+            online.phase() == online::OnlinePhase::Forearm,
+            "online: forearm phase"
+        );
+        kani::cover!(
+            online.phase() == online::OnlinePhase::Resting,
+            "online: no lift-off"
+        );
     }
-    kani::cover!(
-        online.phase() == online::OnlinePhase::Forearm,
-        "online: forearm phase"
-    );
-    kani::cover!(
-        online.phase() == online::OnlinePhase::Resting,
-        "online: no lift-off"
-    );
 }
 
 #[cfg(test)]

@@ -52,7 +52,7 @@ mod verification {
     /// components sum within the limit, with torque and rate within, passes.
     /// The exact circle |(fx, fz)| = max_force is the proptest's
     /// ([`tests`]): the proofs stub `hypot`.
-    pub fn check_force_verdict(
+    pub(super) fn check_force_verdict(
         m: &ForceMonitor,
         wrench: Wrench,
         rate: f64,
@@ -92,7 +92,7 @@ mod verification {
     /// passes within them and names the limit it tripped on.
     #[cfg_attr(kani, kani::proof)]
     #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
-    pub fn verify_req_mon_001_force_monitor_trips_beyond_limits() {
+    pub(super) fn verify_req_mon_001_force_monitor_trips_beyond_limits() {
         let m = monitor();
         let wrench = any_wrench();
         let rate: f64 = kani::any();

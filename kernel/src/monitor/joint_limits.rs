@@ -85,12 +85,13 @@ mod verification {
     use super::*;
     use crate::config::SafetyLimits;
     use crate::kani_inputs::{any_pose, validated_arm, HOLD};
+    use crate::kani_stubs::libm_stubbed;
     #[cfg(not(kani))]
     use limb_kani_stand_in as kani;
 
     /// REQ-MON-005: a non-finite pose trips as a model mismatch, a passing
     /// pose is finite, and a trip names a joint-limit or model limit.
-    pub fn check_joint_verdict(pose: Pose, verdict: Verdict) -> Result<(), &'static str> {
+    pub(super) fn check_joint_verdict(pose: Pose, verdict: Verdict) -> Result<(), &'static str> {
         match verdict {
             Ok(()) if pose.is_finite() => Ok(()),
             Ok(()) => Err("a non-finite pose passed the joint-limit monitor"),
@@ -104,38 +105,36 @@ mod verification {
         }
     }
 
-    /// REQ-MON-005: for any measured pose under a validated model the
-    /// joint-limit monitor is total, trips on NaN and infinities and names
-    /// what it tripped on. That it trips exactly outside the joint ranges is
-    /// numerical (inverse kinematics through atan2): the proptest property
-    /// `arbitrary_sessions_keep_every_safety_property` checks it against an
-    /// independent model. Unwind 22: the validator that makes the fixed
-    /// arm checks 21 values for finiteness.
-    #[cfg_attr(kani, kani::proof)]
-    #[cfg_attr(kani, kani::unwind(22))]
-    #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
-    #[cfg_attr(kani, kani::stub(libm::atan2, crate::kani_stubs::stub::atan2))]
-    #[cfg_attr(kani, kani::stub(libm::sin, crate::kani_stubs::stub::sin))]
-    #[cfg_attr(kani, kani::stub(libm::cos, crate::kani_stubs::stub::cos))]
-    pub fn verify_req_mon_005_joint_limit_monitor_is_total() {
-        let l = SafetyLimits::default();
-        let monitor = JointLimitMonitor::from_limits(&l);
-        let arm = validated_arm();
-        let pose = if kani::any() { any_pose() } else { HOLD };
-        let verdict = monitor.check(arm.geometry(), pose);
-        assert_eq!(check_joint_verdict(pose, verdict), Ok(()));
-        kani::cover!(verdict.is_ok(), "joint limits: passes");
-        kani::cover!(
-            verdict.is_err_and(|v| v.limit == Limit::ModelMismatch),
-            "joint limits: model mismatch"
-        );
+    libm_stubbed! { [hypot, atan2, sin, cos]
+        /// REQ-MON-005: for any measured pose under a validated model the
+        /// joint-limit monitor is total, trips on NaN and infinities and names
+        /// what it tripped on. That it trips exactly outside the joint ranges is
+        /// numerical (inverse kinematics through atan2): the proptest property
+        /// `arbitrary_sessions_keep_every_safety_property` checks it against an
+        /// independent model. Unwind 22: the validator that makes the fixed
+        /// arm checks 21 values for finiteness.
+        #[cfg_attr(kani, kani::proof)]
+        #[cfg_attr(kani, kani::unwind(22))]
+        pub(super) fn verify_req_mon_005_joint_limit_monitor_is_total() {
+            let l = SafetyLimits::default();
+            let monitor = JointLimitMonitor::from_limits(&l);
+            let arm = validated_arm();
+            let pose = if kani::any() { any_pose() } else { HOLD };
+            let verdict = monitor.check(arm.geometry(), pose);
+            assert_eq!(check_joint_verdict(pose, verdict), Ok(()));
+            kani::cover!(verdict.is_ok(), "joint limits: passes");
+            kani::cover!(
+                verdict.is_err_and(|v| v.limit == Limit::ModelMismatch),
+                "joint limits: model mismatch"
+            );
+        }
     }
 
     /// REQ-MON-011: the Estimate verdict on the provisional model's worst
     /// case trips exactly when the largest shoulder elevation is above the
     /// range or the smallest elbow flexion below it (NaN included), naming
     /// that joint; no envelope yet is no verdict.
-    pub fn check_envelope_verdict(
+    pub(super) fn check_envelope_verdict(
         monitor: &JointLimitMonitor,
         envelope: JointEnvelope,
         verdict: Verdict,
@@ -157,7 +156,7 @@ mod verification {
     /// limits, and passes while no provisional model exists. Comparisons
     /// only: no loop, no libm.
     #[cfg_attr(kani, kani::proof)]
-    pub fn verify_req_mon_011_envelope_monitor_trips_beyond_limits() {
+    pub(super) fn verify_req_mon_011_envelope_monitor_trips_beyond_limits() {
         let l = SafetyLimits::default();
         let monitor = JointLimitMonitor::from_limits(&l);
         let envelope = JointEnvelope {

@@ -191,7 +191,11 @@ mod verification {
 
     /// REQ-MON-007: [`at_most`] passes exactly the values at or below the
     /// bound (NaN violates) and a violation records the value and bound.
-    pub fn check_at_most(value: f64, bound: f64, verdict: Verdict) -> Result<(), &'static str> {
+    pub(super) fn check_at_most(
+        value: f64,
+        bound: f64,
+        verdict: Verdict,
+    ) -> Result<(), &'static str> {
         match verdict {
             Ok(()) if value <= bound => Ok(()),
             Ok(()) => Err("at_most passed a value beyond the bound or NaN"),
@@ -209,7 +213,11 @@ mod verification {
 
     /// REQ-MON-005: [`within`] passes exactly the values of the closed
     /// interval (NaN violates) and names the crossed bound.
-    pub fn check_within(value: f64, range: Interval, verdict: Verdict) -> Result<(), &'static str> {
+    pub(super) fn check_within(
+        value: f64,
+        range: Interval,
+        verdict: Verdict,
+    ) -> Result<(), &'static str> {
         let inside = range.low <= value && value <= range.high;
         let below = value < range.low;
         match verdict {
@@ -230,7 +238,7 @@ mod verification {
     /// REQ-MON-007: the upper-bound comparison of every monitor, for any
     /// value and bound (NaN and infinities included).
     #[cfg_attr(kani, kani::proof)]
-    pub fn verify_req_mon_007_at_most_is_a_closed_upper_bound() {
+    pub(super) fn verify_req_mon_007_at_most_is_a_closed_upper_bound() {
         let (value, bound): (f64, f64) = (kani::any(), kani::any());
         let verdict = at_most(Limit::Speed, value, bound);
         assert_eq!(check_at_most(value, bound, verdict), Ok(()));
@@ -245,7 +253,7 @@ mod verification {
     /// REQ-MON-005: the range comparison of the joint-limit and workspace
     /// monitors, for any value and any range.
     #[cfg_attr(kani, kani::proof)]
-    pub fn verify_req_mon_005_within_is_the_closed_interval() {
+    pub(super) fn verify_req_mon_005_within_is_the_closed_interval() {
         let value: f64 = kani::any();
         let range = Interval::new(kani::any(), kani::any());
         let verdict = within(Limit::ElbowFlexion, value, range);

@@ -186,7 +186,7 @@ mod verification {
     /// REQ-MON-002, REQ-MON-003: after any push the window holds at most
     /// its capacity and at most one frame at least `window` older than the
     /// newest (the front).
-    pub fn check_window<const N: usize>(window: &RateWindow<N>) -> Result<(), &'static str> {
+    pub(super) fn check_window<const N: usize>(window: &RateWindow<N>) -> Result<(), &'static str> {
         let Some(back) = window.frames.back() else {
             return Ok(());
         };
@@ -207,7 +207,7 @@ mod verification {
     /// REQ-MON-002, REQ-MON-003: the rates are zero until the frames span
     /// the window, and never NaN (an overflowing difference reads as
     /// infinitely fast).
-    pub fn check_rates<const N: usize>(window: &RateWindow<N>) -> Result<(), &'static str> {
+    pub(super) fn check_rates<const N: usize>(window: &RateWindow<N>) -> Result<(), &'static str> {
         let rates = window.rates();
         let values = [
             rates.velocity.x,
@@ -254,7 +254,7 @@ mod verification {
     /// pushes 4 frames and `push` pops at most the 3 older ones.
     #[cfg_attr(kani, kani::proof)]
     #[cfg_attr(kani, kani::unwind(5))]
-    pub fn verify_req_mon_002_rate_window_spans_its_window() {
+    pub(super) fn verify_req_mon_002_rate_window_spans_its_window() {
         let mut window = RateWindow::<CAPACITY>::new(SafetyLimits::default().rate_window);
         let mut last = f64::NEG_INFINITY;
         let mut dropped_for_room = false;
@@ -292,7 +292,7 @@ mod verification {
     #[cfg_attr(kani, kani::proof)]
     #[cfg_attr(kani, kani::unwind(5))]
     #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
-    pub fn verify_req_mon_002_rates_are_zero_until_the_window_spans() {
+    pub(super) fn verify_req_mon_002_rates_are_zero_until_the_window_spans() {
         let mut window = RateWindow::<2>::new(SafetyLimits::default().rate_window);
         // Any finite frames (the kernel pushes only finite ones): a
         // non-finite draw reads as 0, which keeps every finite frame in

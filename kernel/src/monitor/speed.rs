@@ -27,7 +27,7 @@ mod verification {
     /// REQ-MON-003: for any windowed speed (NaN included) the speed monitor
     /// trips exactly above `max_speed`, naming the speed limit.
     #[cfg_attr(kani, kani::proof)]
-    pub fn verify_req_mon_003_speed_monitor_trips_above_the_limit() {
+    pub(super) fn verify_req_mon_003_speed_monitor_trips_above_the_limit() {
         let m = SpeedMonitor {
             max_speed: SafetyLimits::default().max_speed,
         };

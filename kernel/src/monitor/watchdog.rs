@@ -66,7 +66,7 @@ mod verification {
     /// behind the previous reading, every value of the frame is finite, its
     /// time is not behind the previous frame's, and
     /// `0 ≤ now − time ≤ max_age`; a trip names a watchdog limit.
-    pub fn check_watchdog_verdict(
+    pub(super) fn check_watchdog_verdict(
         max_age: f64,
         frame: &PathSample,
         now: f64,
@@ -114,7 +114,7 @@ mod verification {
     /// REQ-MON-006: for any frame, clock and history the watchdog trips
     /// exactly on a non-finite, stale, future, reversed frame or a bad clock.
     #[cfg_attr(kani, kani::proof)]
-    pub fn verify_req_mon_006_watchdog_trips_exactly_on_faults() {
+    pub(super) fn verify_req_mon_006_watchdog_trips_exactly_on_faults() {
         let max_age = SafetyLimits::default().max_sensor_age;
         let w = Watchdog::new(max_age);
         let now: f64 = kani::any();

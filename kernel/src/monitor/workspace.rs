@@ -54,7 +54,7 @@ mod verification {
     /// REQ-MON-004: the verdict trips exactly when the grasp point or the
     /// elbow (when given) is more than the tolerance below the table or the
     /// grasp point is outside the box, NaN included.
-    pub fn check_workspace_verdict(
+    pub(super) fn check_workspace_verdict(
         m: &WorkspaceMonitor,
         pose: Pose,
         elbow: Option<Point>,
@@ -75,7 +75,7 @@ mod verification {
     /// REQ-MON-004: for any grasp pose and any (or no) elbow the workspace
     /// monitor trips exactly outside the workspace and above the table.
     #[cfg_attr(kani, kani::proof)]
-    pub fn verify_req_mon_004_workspace_monitor_trips_beyond_limits() {
+    pub(super) fn verify_req_mon_004_workspace_monitor_trips_beyond_limits() {
         let m = monitor();
         let pose = any_pose();
         let elbow = if kani::any() {
