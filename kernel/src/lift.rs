@@ -35,13 +35,42 @@
 //! lift ends when that worst case comes within `joint_margin` of a limit;
 //! the joint-limit monitor stops the kernel if it ever crosses one.
 
-use crate::config::{KernelConfig, LiftShaping, SafetyLimits};
+use crate::config::{KernelConfig, LiftShaping, SafetyLimits, ValidationLimits};
 use crate::estimation::online::OnlineEstimator;
 use crate::geometry::Pose;
 use crate::monitor::joint_limits::JointEnvelope;
 use crate::monitor::Limit;
 use crate::motion::{EstimationMotion, MinimumJerkMove, SetPoint};
 use crate::path::PathSample;
+
+/// What the lift reads of the kernel's configuration, and nothing more.
+#[derive(Clone, Copy, Debug)]
+pub struct LiftSettings<'a> {
+    /// How the lift is shaped and ended.
+    pub shaping: &'a LiftShaping,
+    /// The validator's ranges: the provisional model's prior.
+    pub prior: &'a ValidationLimits,
+    /// The joint limits the lift keeps its margin to.
+    pub limits: &'a SafetyLimits,
+    /// The estimation motion's peak grasp-point speed (its extension's) [m/s].
+    pub peak_speed: f64,
+    /// The impedance stiffness (x, z [N/m], psi [N m/rad]): where a hold
+    /// carries the arm.
+    pub stiffness: &'a [f64; 3],
+}
+
+impl<'a> LiftSettings<'a> {
+    /// The lift's settings in `config`.
+    pub fn of(config: &'a KernelConfig) -> Self {
+        Self {
+            shaping: &config.lift_shaping,
+            prior: &config.validation,
+            limits: &config.limits,
+            peak_speed: config.estimation_motion.peak_speed,
+            stiffness: &config.impedance.stiffness,
+        }
+    }
+}
 
 /// Why the lift ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -150,9 +179,9 @@ impl ShapedLift {
         now: f64,
         frame: &PathSample,
         online: &OnlineEstimator,
-        config: &KernelConfig,
+        settings: &LiftSettings<'_>,
     ) -> Result<LiftCommand, crate::estimation::EstimateError> {
-        let shaping = &config.lift_shaping;
+        let shaping = settings.shaping;
         let dt = if now > self.last_now {
             now - self.last_now
         } else {
@@ -174,18 +203,18 @@ impl ShapedLift {
                     )));
                 }
                 self.clock = next;
-                let envelope = online.joint_envelope(frame.pose, &config.validation);
-                let mut reason = end_reason(online, envelope, shaping, &config.limits);
+                let envelope = online.joint_envelope(frame.pose, settings.prior);
+                let mut reason = end_reason(online, envelope, shaping, settings.limits);
                 if reason.is_none() && next >= duration {
                     if self.extended {
                         reason = Some(LiftEnd::MotionComplete);
                     } else {
-                        self.extend(config)?;
+                        self.extend(settings)?;
                     }
                 }
                 match reason {
                     Some(reason) => {
-                        let hold = lift_hold(frame, online, config);
+                        let hold = lift_hold(frame, online, settings);
                         let to_hold = MinimumJerkMove::bounded(
                             set_point.pose,
                             hold,
@@ -226,14 +255,17 @@ impl ShapedLift {
     /// [`LiftShaping::extension`] at the lift's peak speed (long arms sweep
     /// too little upper-arm arc on plant.md's lift: 0.64 rad for l1 0.38 m,
     /// l2 0.26 m).
-    fn extend(&mut self, config: &KernelConfig) -> Result<(), crate::estimation::EstimateError> {
+    fn extend(
+        &mut self,
+        settings: &LiftSettings<'_>,
+    ) -> Result<(), crate::estimation::EstimateError> {
         let start = self.segment.start();
         let goal = self.segment.goal();
         let (dx, dz) = (goal.x - start.x, goal.z - start.z);
         let length = libm::hypot(dx, dz);
-        let reach = config.lift_shaping.extension / length.max(f64::EPSILON);
+        let reach = settings.shaping.extension / length.max(f64::EPSILON);
         let extended = Pose::new(goal.x + reach * dx, goal.z + reach * dz, goal.psi);
-        self.segment = MinimumJerkMove::new(goal, extended, config.estimation_motion.peak_speed)
+        self.segment = MinimumJerkMove::new(goal, extended, settings.peak_speed)
             .map_err(|_| crate::estimation::EstimateError::NonFiniteSample)?;
         self.clock = 0.0;
         self.extended = true;
@@ -307,12 +339,12 @@ pub const HOLD_HALVINGS: usize = 6;
 /// estimate was refined (`limb population --arms 500 --seed 2026`, arm
 /// 121). Without a provisional forearm there is no envelope to judge by,
 /// and the carrying pose is held.
-fn lift_hold(frame: &PathSample, online: &OnlineEstimator, config: &KernelConfig) -> Pose {
-    let carried = holding_pose(frame, &config.impedance.stiffness);
+fn lift_hold(frame: &PathSample, online: &OnlineEstimator, settings: &LiftSettings<'_>) -> Pose {
+    let carried = holding_pose(frame, settings.stiffness);
     let slack = |pose: Pose| {
         online
-            .joint_envelope(pose, &config.validation)
-            .map(|envelope| joint_slack(envelope, &config.lift_shaping, &config.limits))
+            .joint_envelope(pose, settings.prior)
+            .map(|envelope| joint_slack(envelope, settings.shaping, settings.limits))
             .map(|(elbow, shoulder)| elbow.min(shoulder))
     };
     let Some(measured) = slack(frame.pose) else {

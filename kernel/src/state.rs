@@ -34,7 +34,7 @@ use crate::estimation::online::OnlineEstimator;
 use crate::estimation::refine::{Progress, Refinement, SAMPLES_PER_STEP};
 use crate::estimation::EstimateError;
 use crate::geometry::{Pose, Wrench};
-use crate::lift::{LiftCommand, LiftEnd, ShapedLift};
+use crate::lift::{LiftCommand, LiftEnd, LiftSettings, ShapedLift};
 use crate::monitor::joint_limits::JointEnvelope;
 use crate::monitor::joint_limits::JointLimitMonitor;
 use crate::monitor::workspace::WorkspaceMonitor;
@@ -396,7 +396,7 @@ impl Estimate {
         }
         let Some((hold, reason)) = lift.settled(now, config.lift_shaping.settle_time) else {
             let command = lift
-                .advance(now, frame, &self.online, config)
+                .advance(now, frame, &self.online, &LiftSettings::of(config))
                 .map_err(StopReason::EstimationFailed)?;
             return Ok(match command {
                 LiftCommand::Move(set_point) => EstimateStep::Move(set_point),

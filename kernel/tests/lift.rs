@@ -14,7 +14,7 @@ mod support {
 
 use limb_kernel::estimation::online::OnlineEstimator;
 use limb_kernel::geometry::Point;
-use limb_kernel::lift::{self, LiftCommand, LiftEnd, LiftPhase, ShapedLift};
+use limb_kernel::lift::{self, LiftCommand, LiftEnd, LiftPhase, LiftSettings, ShapedLift};
 use limb_kernel::monitor::joint_limits::JointEnvelope;
 use limb_kernel::monitor::Limit;
 use limb_kernel::motion::{EstimationMotion, SetPoint};
@@ -46,7 +46,7 @@ fn replay_path(path: &[PathSample], config: &KernelConfig, each: &mut Each) {
         let frame = path[end - 1];
         online.record(&path[..end], &config.validation);
         let command = lift
-            .advance(frame.time, &frame, &online, config)
+            .advance(frame.time, &frame, &online, &LiftSettings::of(config))
             .unwrap_or_else(|e| panic!("at {} s: {e:?}", frame.time));
         each(&frame, command, &lift, &online, &motion);
     }

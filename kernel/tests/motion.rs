@@ -73,7 +73,7 @@ fn req_mon_011_without_a_forearm_the_lift_stays_within_the_prior_reach() {
     use limb_kernel::estimation::online::OnlineEstimator;
     use limb_kernel::estimation::EstimateError;
     use limb_kernel::geometry::Wrench;
-    use limb_kernel::lift::{LiftCommand, LiftPhase, ShapedLift};
+    use limb_kernel::lift::{LiftCommand, LiftPhase, LiftSettings, ShapedLift};
     use limb_kernel::{KernelConfig, PathSample};
     let config = KernelConfig::default();
     let grasp = Pose::new(0.45, 0.0, 0.0);
@@ -92,7 +92,7 @@ fn req_mon_011_without_a_forearm_the_lift_stays_within_the_prior_reach() {
             pose: grasp,
             wrench: Wrench::default(),
         };
-        match lift.advance(now, &frame, &online, &config) {
+        match lift.advance(now, &frame, &online, &LiftSettings::of(&config)) {
             Ok(LiftCommand::Move(set_point) | LiftCommand::Hold(set_point)) => {
                 farthest = farthest.max(set_point.pose.point().distance(grasp.point()));
                 if let LiftPhase::AwaitingForearm { since } = lift.phase() {
