@@ -192,31 +192,13 @@ fn starts() -> &'static Starts {
     })
 }
 
-/// The safety limit fields an [`Action::UpdateLimit`] can change: every
-/// number of `SafetyLimits` (`workspace_z.low` was missing until issue 38).
-const LIMIT_FIELDS: usize = 16;
-
+/// The limits with one number changed: any of `SafetyLimits`'s numbers
+/// (the kernel's own list, [`SafetyLimits::number_mut`]), moved by `value`.
 fn with_limit(config: &KernelConfig, field: u8, value: Value) -> SafetyLimits {
     let mut l = config.limits;
-    let slot = match usize::from(field) % LIMIT_FIELDS {
-        0 => &mut l.max_force,
-        1 => &mut l.max_torque,
-        2 => &mut l.max_force_rate,
-        3 => &mut l.max_speed,
-        4 => &mut l.rate_window,
-        5 => &mut l.shoulder_elevation.low,
-        6 => &mut l.shoulder_elevation.high,
-        7 => &mut l.elbow_flexion.low,
-        8 => &mut l.elbow_flexion.high,
-        9 => &mut l.max_model_mismatch,
-        10 => &mut l.table_tolerance,
-        11 => &mut l.workspace_x.low,
-        12 => &mut l.workspace_z.high,
-        13 => &mut l.max_sensor_age,
-        14 => &mut l.workspace_x.high,
-        _ => &mut l.workspace_z.low,
-    };
-    *slot = value.around(*slot, *slot * 0.05);
+    if let Some((_, slot)) = l.number_mut(usize::from(field) % SafetyLimits::NUMBERS) {
+        *slot = value.around(*slot, *slot * 0.05);
+    }
     l
 }
 

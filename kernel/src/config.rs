@@ -236,6 +236,38 @@ impl SafetyLimits {
         }
         Ok(())
     }
+
+    /// How many numbers the limits hold: 8 scalars and 4 intervals of two.
+    pub const NUMBERS: usize = 16;
+
+    /// The `index`-th number of the limits (`index` < [`Self::NUMBERS`],
+    /// in [`ConfigField`] code order, an interval's low end before its
+    /// high end) with the field [`Self::check`] names for it; `None`
+    /// beyond. One list, so a fuzzer or a test that changes "any limit"
+    /// reaches every one (`fuzz/src/session.rs` missed `workspace_z.low`
+    /// until issue 38).
+    pub fn number_mut(&mut self, index: usize) -> Option<(ConfigField, &mut f64)> {
+        use ConfigField as F;
+        Some(match index {
+            0 => (F::MaxForce, &mut self.max_force),
+            1 => (F::MaxTorque, &mut self.max_torque),
+            2 => (F::MaxForceRate, &mut self.max_force_rate),
+            3 => (F::MaxSpeed, &mut self.max_speed),
+            4 => (F::RateWindow, &mut self.rate_window),
+            5 => (F::MaxModelMismatch, &mut self.max_model_mismatch),
+            6 => (F::MaxSensorAge, &mut self.max_sensor_age),
+            7 => (F::TableTolerance, &mut self.table_tolerance),
+            8 => (F::ShoulderElevation, &mut self.shoulder_elevation.low),
+            9 => (F::ShoulderElevation, &mut self.shoulder_elevation.high),
+            10 => (F::ElbowFlexion, &mut self.elbow_flexion.low),
+            11 => (F::ElbowFlexion, &mut self.elbow_flexion.high),
+            12 => (F::WorkspaceX, &mut self.workspace_x.low),
+            13 => (F::WorkspaceX, &mut self.workspace_x.high),
+            14 => (F::WorkspaceZ, &mut self.workspace_z.low),
+            15 => (F::WorkspaceZ, &mut self.workspace_z.high),
+            _ => return None,
+        })
+    }
 }
 
 /// The whole kernel configuration.
@@ -468,6 +500,34 @@ mod verification {
 
 #[cfg(test)]
 mod tests {
+    /// Every number of the limits is listed once, under the field `check`
+    /// names when that number alone is NaN: 16 distinct numbers, and the
+    /// limits are 16 numbers in all.
+    #[test]
+    fn every_limit_number_is_listed_once_under_its_checked_field() {
+        let mut addresses = [0usize; SafetyLimits::NUMBERS];
+        for (index, address) in addresses.iter_mut().enumerate() {
+            let mut limits = SafetyLimits::default();
+            let (field, number) = limits.number_mut(index).expect("listed");
+            *number = f64::NAN;
+            assert_eq!(limits.check().map_err(|e| e.field), Err(field), "{index}");
+            let mut fresh = SafetyLimits::default();
+            let base = &fresh as *const SafetyLimits as usize;
+            *address = fresh
+                .number_mut(index)
+                .map_or(0, |(_, n)| n as *const f64 as usize - base);
+        }
+        addresses.sort_unstable();
+        assert!(addresses.windows(2).all(|w| w[0] < w[1]), "{addresses:?}");
+        assert!(SafetyLimits::default()
+            .number_mut(SafetyLimits::NUMBERS)
+            .is_none());
+        assert_eq!(
+            core::mem::size_of::<SafetyLimits>(),
+            SafetyLimits::NUMBERS * core::mem::size_of::<f64>()
+        );
+    }
+
     use super::*;
 
     #[test]
