@@ -428,7 +428,7 @@ mod tests {
 #[cfg(any(test, kani))]
 mod verification {
     use super::*;
-    use crate::kani_inputs::{any_pose, FOREARM, HOLD, SHOULDER, UPPER_ARM};
+    use crate::kani_inputs::{FOREARM, HOLD, SHOULDER, UPPER_ARM};
     use crate::kani_stubs::libm_stubbed;
     #[cfg(not(kani))]
     use limb_kani_stand_in as kani;
@@ -463,7 +463,7 @@ mod verification {
         /// a typed error (NaN and infinities included).
         #[cfg_attr(kani, kani::proof)]
         pub(super) fn verify_req_mon_005_pose_inverse_is_total() {
-            let pose = if kani::any() { any_pose() } else { HOLD };
+            let pose = if kani::any() { kani::any::<Pose>() } else { HOLD };
             match fixed_arm().inverse_from_pose(pose) {
                 Ok((q, residual)) => {
                     assert!(pose.is_finite());

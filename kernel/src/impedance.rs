@@ -347,7 +347,6 @@ mod tests {
 mod verification {
     use super::*;
     use crate::config::KernelConfig;
-    use crate::kani_inputs::{any_pose, any_pose_rate, any_set_point};
     #[cfg(not(kani))]
     use limb_kani_stand_in as kani;
 
@@ -549,8 +548,8 @@ mod verification {
     #[cfg_attr(kani, kani::unwind(6))]
     pub(super) fn verify_req_cmd_001_law_is_finite_only_on_finite_inputs() {
         let law = default_law();
-        let set_point = any_set_point();
-        let (pose, velocity) = (any_pose(), any_pose_rate());
+        let set_point = kani::any::<SetPoint>();
+        let (pose, velocity) = (kani::any::<Pose>(), kani::any::<PoseRate>());
         let wrench = law.wrench_about(pose, velocity, &set_point);
         let finite = pose.is_finite()
             && velocity.is_finite()
@@ -580,7 +579,7 @@ mod verification {
     #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
     pub(super) fn verify_req_cmd_002_set_point_speed_is_limited_and_flagged() {
         let law = default_law();
-        let set_point = any_set_point();
+        let set_point = kani::any::<SetPoint>();
         let mut saturation = Saturation::default();
         let limited = law.limit_speed(set_point, &mut saturation);
         let out = ImpedanceOutput {

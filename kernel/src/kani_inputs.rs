@@ -19,36 +19,46 @@ use crate::path::PathSample;
 use crate::state::Request;
 use crate::validate::{validate, ValidatedArm};
 
-/// Any pose.
-pub(crate) fn any_pose() -> Pose {
-    Pose::new(kani::any(), kani::any(), kani::any())
-}
+// Any value of each input type, component by component (every f64,
+// NaN and infinities included): `kani::any::<Pose>()`. The one trait
+// serves real Kani and the sampling stand-in (its `Arbitrary::any` is
+// Kani's signature).
 
-/// Any pose rate.
-pub(crate) fn any_pose_rate() -> PoseRate {
-    PoseRate::new(kani::any(), kani::any(), kani::any())
-}
-
-/// Any set-point: pose, velocity and acceleration.
-pub(crate) fn any_set_point() -> SetPoint {
-    SetPoint {
-        pose: any_pose(),
-        velocity: any_pose_rate(),
-        acceleration: any_pose_rate(),
+impl kani::Arbitrary for Pose {
+    fn any() -> Self {
+        Pose::new(kani::any(), kani::any(), kani::any())
     }
 }
 
-/// Any wrench.
-pub(crate) fn any_wrench() -> Wrench {
-    Wrench::new(kani::any(), kani::any(), kani::any())
+impl kani::Arbitrary for PoseRate {
+    fn any() -> Self {
+        PoseRate::new(kani::any(), kani::any(), kani::any())
+    }
 }
 
-/// Any sensor frame.
-pub(crate) fn any_frame() -> PathSample {
-    PathSample {
-        time: kani::any(),
-        pose: any_pose(),
-        wrench: any_wrench(),
+impl kani::Arbitrary for SetPoint {
+    fn any() -> Self {
+        SetPoint {
+            pose: kani::any(),
+            velocity: kani::any(),
+            acceleration: kani::any(),
+        }
+    }
+}
+
+impl kani::Arbitrary for Wrench {
+    fn any() -> Self {
+        Wrench::new(kani::any(), kani::any(), kani::any())
+    }
+}
+
+impl kani::Arbitrary for PathSample {
+    fn any() -> Self {
+        PathSample {
+            time: kani::any(),
+            pose: kani::any(),
+            wrench: kani::any(),
+        }
     }
 }
 
@@ -57,7 +67,7 @@ pub(crate) fn any_frame() -> PathSample {
 /// no interaction force. Kani explores both.
 pub(crate) fn any_frame_or_at(pose: Pose, time: f64) -> PathSample {
     if kani::any() {
-        any_frame()
+        kani::any()
     } else {
         PathSample {
             time,

@@ -717,7 +717,7 @@ impl Kernel {
 mod verification {
     use super::*;
     use crate::kani_inputs::{
-        any_frame, any_frame_or_at, any_request, any_request_of_known_targets, validated_arm, HOLD,
+        any_frame_or_at, any_request, any_request_of_known_targets, validated_arm, HOLD,
         MANIPULATION_TARGET,
     };
     use crate::kani_stubs::libm_stubbed;
@@ -951,7 +951,7 @@ mod verification {
             let reason = kernel.stopped().map(|s| s.reason());
             let check = |kernel: &mut Kernel| {
                 // A frame, or silence (the kernel judges its newest frame).
-                let frame = any_frame();
+                let frame = kani::any::<PathSample>();
                 let sensed: bool = kani::any();
                 let command = kernel.step(sensed.then_some(&frame), kani::any());
                 assert_eq!(command.check_components(&limits), Ok(()));

@@ -202,7 +202,7 @@ libm_stubbed! { [hypot, sqrt, atan2, sin, cos]
         }
         if kani::any() {
             let at = usize::from(kani::any::<u8>()) % N;
-            path[at] = crate::kani_inputs::any_frame();
+            path[at] = kani::any::<PathSample>();
         }
         let path = &path[..length];
         let result = estimate_arm(path, Method::Ls);
@@ -261,7 +261,7 @@ libm_stubbed! { [hypot, sqrt, atan2, sin, cos]
         let mut online = online::OnlineEstimator::new();
         for end in 1..=ONLINE_SAMPLES {
             let sample = if kani::any() {
-                crate::kani_inputs::any_frame()
+                kani::any::<PathSample>()
             } else {
                 // A rising forearm: lift-off under the sampling stand-in too.
                 PathSample {

@@ -32,7 +32,6 @@ impl ForceMonitor {
 mod verification {
     use super::*;
     use crate::config::SafetyLimits;
-    use crate::kani_inputs::any_wrench;
     use crate::monitor::Limit;
     #[cfg(not(kani))]
     use limb_kani_stand_in as kani;
@@ -94,7 +93,7 @@ mod verification {
     #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
     pub(super) fn verify_req_mon_001_force_monitor_trips_beyond_limits() {
         let m = monitor();
-        let wrench = any_wrench();
+        let wrench = kani::any::<Wrench>();
         let rate: f64 = kani::any();
         let verdict = m.check(wrench, rate);
         assert_eq!(check_force_verdict(&m, wrench, rate, verdict), Ok(()));

@@ -84,7 +84,7 @@ pub struct JointEnvelope {
 mod verification {
     use super::*;
     use crate::config::SafetyLimits;
-    use crate::kani_inputs::{any_pose, validated_arm, HOLD};
+    use crate::kani_inputs::{validated_arm, HOLD};
     use crate::kani_stubs::libm_stubbed;
     #[cfg(not(kani))]
     use limb_kani_stand_in as kani;
@@ -119,7 +119,7 @@ mod verification {
             let l = SafetyLimits::default();
             let monitor = JointLimitMonitor::from_limits(&l);
             let arm = validated_arm();
-            let pose = if kani::any() { any_pose() } else { HOLD };
+            let pose = if kani::any() { kani::any::<Pose>() } else { HOLD };
             let verdict = monitor.check(arm.geometry(), pose);
             assert_eq!(check_joint_verdict(pose, verdict), Ok(()));
             kani::cover!(verdict.is_ok(), "joint limits: passes");

@@ -238,7 +238,7 @@ mod verification {
         #[cfg(not(kani))]
         let frame = PathSample {
             time,
-            ..crate::kani_inputs::any_frame()
+            ..kani::any::<PathSample>()
         };
         frame
     }

@@ -58,7 +58,6 @@ impl Watchdog {
 mod verification {
     use super::*;
     use crate::config::SafetyLimits;
-    use crate::kani_inputs::any_frame;
     #[cfg(not(kani))]
     use limb_kani_stand_in as kani;
 
@@ -118,7 +117,7 @@ mod verification {
         let max_age = SafetyLimits::default().max_sensor_age;
         let w = Watchdog::new(max_age);
         let now: f64 = kani::any();
-        let mut frame = any_frame();
+        let mut frame = kani::any::<PathSample>();
         if kani::any() {
             // A frame stamped up to 2 max_age before `now`: the nominal and
             // the stale branch under the sampling stand-in too.

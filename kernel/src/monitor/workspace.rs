@@ -38,7 +38,6 @@ impl WorkspaceMonitor {
 mod verification {
     use super::*;
     use crate::config::SafetyLimits;
-    use crate::kani_inputs::any_pose;
     #[cfg(not(kani))]
     use limb_kani_stand_in as kani;
 
@@ -77,7 +76,7 @@ mod verification {
     #[cfg_attr(kani, kani::proof)]
     pub(super) fn verify_req_mon_004_workspace_monitor_trips_beyond_limits() {
         let m = monitor();
-        let pose = any_pose();
+        let pose = kani::any::<Pose>();
         let elbow = if kani::any() {
             Some(Point::new(kani::any(), kani::any()))
         } else {

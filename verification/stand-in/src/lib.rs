@@ -47,23 +47,23 @@ fn next() -> u64 {
 /// Values [`any`] can produce.
 pub trait Arbitrary {
     /// One draw.
-    fn draw() -> Self;
+    fn any() -> Self;
 }
 
 impl Arbitrary for bool {
-    fn draw() -> Self {
+    fn any() -> Self {
         next() & 1 == 1
     }
 }
 
 impl Arbitrary for u8 {
-    fn draw() -> Self {
+    fn any() -> Self {
         (next() >> 56) as u8
     }
 }
 
 impl Arbitrary for u32 {
-    fn draw() -> Self {
+    fn any() -> Self {
         match next() % 4 {
             0 => (next() % 8) as u32,
             1 => u32::MAX - (next() % 8) as u32,
@@ -73,7 +73,7 @@ impl Arbitrary for u32 {
 }
 
 impl Arbitrary for f64 {
-    fn draw() -> Self {
+    fn any() -> Self {
         const EDGES: [f64; 10] = [
             0.0,
             -0.0,
@@ -98,7 +98,7 @@ impl Arbitrary for f64 {
 
 /// An arbitrary value.
 pub fn any<T: Arbitrary>() -> T {
-    T::draw()
+    T::any()
 }
 
 /// Discards the current draw unless `condition` holds.
