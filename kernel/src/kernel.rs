@@ -35,6 +35,7 @@ use crate::config::{ConfigError, KernelConfig, SafetyLimits};
 use crate::geometry::{Pose, Wrench};
 use crate::impedance::{ImpedanceLaw, Saturation};
 use crate::lift::{holding_pose, LiftPhase};
+use crate::monitor::joint_limits::JointEnvelope;
 use crate::monitor::rates::RateWindow;
 use crate::monitor::set::MonitorSet;
 use crate::monitor::{Limit, Verdict, Violation};
@@ -214,9 +215,10 @@ impl Kernel {
         }
         let at = Some(frame.pose);
         let rates = self.rates.rates();
-        self.check_monitors(frame, rates.speed(), rates.force_rate)
+        let envelope = self
+            .check_monitors(frame, rates.speed(), rates.force_rate)
             .map_err(|violation| (StopReason::Monitor(violation), at))?;
-        let (set_point, mode) = match self.state_set_point(frame, now) {
+        let (set_point, mode) = match self.state_set_point(frame, now, envelope) {
             Ok(Plan::Follow(set_point, mode)) => (set_point, mode),
             Ok(Plan::Enter(validated)) => {
                 let hold = validated.hold();
@@ -576,8 +578,15 @@ impl Kernel {
             .check(pose, arm.map(|a| a.elbow_from_pose(pose)))
     }
 
-    /// The monitors that apply to the current state (watchdog excluded).
-    fn check_monitors(&self, frame: &PathSample, speed: f64, force_rate: f64) -> Verdict {
+    /// The monitors that apply to the current state (watchdog excluded);
+    /// in Estimate without a model, the provisional model's joint envelope
+    /// they judged at the frame's pose.
+    fn check_monitors(
+        &self,
+        frame: &PathSample,
+        speed: f64,
+        force_rate: f64,
+    ) -> Result<Option<JointEnvelope>, Violation> {
         let m = &self.monitors;
         m.force.check(frame.wrench, force_rate)?;
         if matches!(self.state, State::Estimate(_) | State::Manipulate(_)) {
@@ -588,17 +597,23 @@ impl Kernel {
         m.workspace
             .check(frame.pose, arm.map(|a| a.elbow_from_pose(frame.pose)))?;
         match (&self.state, arm) {
-            (_, Some(arm)) => joints.check(arm, frame.pose),
+            (_, Some(arm)) => joints.check(arm, frame.pose).map(|()| None),
             (State::Estimate(estimate), None) => {
-                joints.check_envelope(estimate.joint_envelope(frame.pose, &self.config.validation))
+                let envelope = estimate.joint_envelope(frame.pose, &self.config.validation);
+                joints.check_envelope(envelope).map(|()| envelope)
             }
-            _ => Ok(()),
+            _ => Ok(None),
         }
     }
 
     /// The state's set-point for this step, with its mode, or, on the step
     /// the estimation concludes, the validated state to enter.
-    fn state_set_point(&mut self, frame: &PathSample, now: f64) -> Result<Plan, StopReason> {
+    fn state_set_point(
+        &mut self,
+        frame: &PathSample,
+        now: f64,
+        envelope: Option<JointEnvelope>,
+    ) -> Result<Plan, StopReason> {
         Ok(match &mut self.state {
             State::Grasp(grasp) => Plan::Follow(grasp.hold(frame.pose), CommandMode::Hold),
             State::Validated(validated) => Plan::Follow(validated.hold(), CommandMode::Hold),
@@ -611,7 +626,7 @@ impl Kernel {
             State::SafeStop(stop) => Plan::Stopped(*stop),
             State::Estimate(estimate) => {
                 let lifting = estimate.lift_ended().is_none();
-                let step = estimate.advance(&mut self.path, frame, now, &self.config)?;
+                let step = estimate.advance(&mut self.path, frame, now, envelope, &self.config)?;
                 if let Some(reason) = estimate.lift_ended().filter(|_| lifting) {
                     self.trace.record(TraceEvent {
                         time: now,

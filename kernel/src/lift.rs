@@ -168,8 +168,11 @@ impl ShapedLift {
     }
 
     /// Advances the lift to kernel time `now` given the online estimate
-    /// (already updated with this step's sample) and the measured `pose`.
-    /// The caller starts the conclusion when [`Self::settled`] says so.
+    /// (already updated with this step's sample) and the measured `frame`.
+    /// `judged` is the joint envelope at the frame's pose when the caller
+    /// already has it for this estimate (the joint-limit monitor's, on a
+    /// step that recorded no sample); `None`: the lift computes it. The
+    /// caller starts the conclusion when [`Self::settled`] says so.
     ///
     /// # Errors
     /// No provisional forearm within `forearm_wait`, or a move that cannot
@@ -179,6 +182,7 @@ impl ShapedLift {
         now: f64,
         frame: &PathSample,
         online: &OnlineEstimator,
+        judged: Option<Option<JointEnvelope>>,
         settings: &LiftSettings<'_>,
     ) -> Result<LiftCommand, crate::estimation::EstimateError> {
         let shaping = settings.shaping;
@@ -203,7 +207,8 @@ impl ShapedLift {
                     )));
                 }
                 self.clock = next;
-                let envelope = online.joint_envelope(frame.pose, settings.prior);
+                let envelope =
+                    judged.unwrap_or_else(|| online.joint_envelope(frame.pose, settings.prior));
                 let mut reason = end_reason(online, envelope, shaping, settings.limits);
                 if reason.is_none() && next >= duration {
                     if self.extended {

@@ -373,6 +373,9 @@ impl Estimate {
     /// per step and, on the step it finishes, the validator (the only way
     /// into [`Validated`], held where the lift ended). O(1) work: one
     /// moment update, or at most [`SAMPLES_PER_STEP`] refinement samples.
+    /// `judged` is the joint envelope at the frame's pose that the
+    /// joint-limit monitor judged this step ([`Self::joint_envelope`]);
+    /// the lift reuses it unless this step's sample changed the estimate.
     ///
     /// # Errors
     /// The path buffer is full, no forearm appeared in time, the
@@ -382,6 +385,7 @@ impl Estimate {
         path: &mut GraspPath,
         frame: &PathSample,
         now: f64,
+        judged: Option<JointEnvelope>,
         config: &KernelConfig,
     ) -> Result<EstimateStep, StopReason> {
         let lift = match &mut self.stage {
@@ -390,13 +394,15 @@ impl Estimate {
             }
             EstimateStage::Lifting(lift) => lift,
         };
+        let mut judged = Some(judged);
         if is_due(path.last(), frame.time) {
             path.push(*frame).map_err(|_| StopReason::PathBufferFull)?;
             self.online.record(path, &config.validation);
+            judged = None;
         }
         let Some((hold, reason)) = lift.settled(now, config.lift_shaping.settle_time) else {
             let command = lift
-                .advance(now, frame, &self.online, &LiftSettings::of(config))
+                .advance(now, frame, &self.online, judged, &LiftSettings::of(config))
                 .map_err(StopReason::EstimationFailed)?;
             return Ok(match command {
                 LiftCommand::Move(set_point) => EstimateStep::Move(set_point),

@@ -46,7 +46,7 @@ fn replay_path(path: &[PathSample], config: &KernelConfig, each: &mut Each) {
         let frame = path[end - 1];
         online.record(&path[..end], &config.validation);
         let command = lift
-            .advance(frame.time, &frame, &online, &LiftSettings::of(config))
+            .advance(frame.time, &frame, &online, None, &LiftSettings::of(config))
             .unwrap_or_else(|e| panic!("at {} s: {e:?}", frame.time));
         each(&frame, command, &lift, &online, &motion);
     }

@@ -92,7 +92,7 @@ fn req_mon_011_without_a_forearm_the_lift_stays_within_the_prior_reach() {
             pose: grasp,
             wrench: Wrench::default(),
         };
-        match lift.advance(now, &frame, &online, &LiftSettings::of(&config)) {
+        match lift.advance(now, &frame, &online, None, &LiftSettings::of(&config)) {
             Ok(LiftCommand::Move(set_point) | LiftCommand::Hold(set_point)) => {
                 farthest = farthest.max(set_point.pose.point().distance(grasp.point()));
                 if let LiftPhase::AwaitingForearm { since } = lift.phase() {
