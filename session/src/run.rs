@@ -48,8 +48,9 @@ pub trait Observer<R: ?Sized> {
     fn after_step(&mut self, _robot: &R, _frame: &Frame, _state: StateKind, _command: &Command) {}
     /// Each transition or refusal the kernel recorded, in order.
     fn event(&mut self, _event: &TraceEvent) {}
-    /// Every kernel step, on a new frame or (`stale`) on the last frame
-    /// again, after the step returned, before its events.
+    /// Every kernel step, on a new frame or (`stale`) on none, the kernel
+    /// judging its last frame again, after the step returned, before its
+    /// events.
     fn stepped(&mut self, _step: &Step<'_>) {}
 }
 
@@ -58,10 +59,12 @@ pub trait Observer<R: ?Sized> {
 pub struct Step<'a> {
     /// Kernel time of the step [s].
     pub now: f64,
-    /// The frame the kernel stepped on.
+    /// The frame the kernel judged: the new one, or on a silent step the
+    /// last one the robot gave.
     pub sample: &'a PathSample,
-    /// True when that frame is the last one again: the robot was silent, or
-    /// its stamps jumped by more than the kernel's `max_sensor_age`.
+    /// True on a step without a new frame (`Kernel::step(None, now)`): the
+    /// robot was silent, or its stamps jumped by more than the kernel's
+    /// `max_sensor_age`.
     pub stale: bool,
     /// What the step returned.
     pub command: &'a Command,
@@ -156,8 +159,8 @@ pub struct Outcome {
     pub saturated_commands: u64,
     /// Kernel steps taken (frames and silences).
     pub steps: u64,
-    /// Steps on an old frame: the robot was silent, or its stamps jumped
-    /// by more than the kernel's sensor-age limit.
+    /// Steps without a new frame: the robot was silent, or its stamps
+    /// jumped by more than the kernel's sensor-age limit.
     pub stale_steps: u64,
     /// Stops requested because the robot stopped following mid-motion.
     pub unfollowed_stops: u64,
