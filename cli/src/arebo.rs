@@ -30,10 +30,9 @@ use crate::session_log::{run_robot, SessionArgs};
 use clap::Subcommand;
 use limb_arebo::calibration::{ValidatedArmModel, CALIBRATION_PHASE};
 use limb_arebo::control::{GravityParameters, Mode};
+use limb_arebo::device::{self, DevicePacing, FaultSwitch};
 use limb_arebo::human::ArmMass;
-use limb_arebo::link::{
-    self, DevicePacing, FaultSwitch, LinkError, Session, SessionState, StopCause,
-};
+use limb_arebo::link::{self, LinkError, Session, SessionState, StopCause};
 use limb_arebo::protocol::{Command, ControlType};
 use limb_arebo::recording::{self, Calibration, CalibrationError, CalibrationSettings};
 use limb_arebo::robot::{AreboRobot, AreboStop};
@@ -197,7 +196,7 @@ fn serve(seconds: f64, held_arm: bool, lock_step: bool) -> Result<(), CliError> 
     println!("{}", pty.path.display());
     let handle = match (held_arm, lock_step) {
         (false, true) => return Err(CliError::BadInput("--lock-step needs --held-arm".into())),
-        (false, false) => link::spawn_device(
+        (false, false) => device::spawn_device(
             device,
             sim::Setup::default(),
             trajectory,
@@ -205,7 +204,7 @@ fn serve(seconds: f64, held_arm: bool, lock_step: bool) -> Result<(), CliError> 
             period,
             FaultSwitch::default(),
         ),
-        (true, lock_step) => link::spawn_held_arm(
+        (true, lock_step) => device::spawn_held_arm(
             device,
             frames,
             if lock_step {

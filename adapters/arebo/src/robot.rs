@@ -44,19 +44,15 @@
 
 use crate::control::{interaction_force, GravityParameters};
 use crate::encoder::{actuated_angles, Encoder};
-use crate::held_arm::REFERENCE_HEADING;
 use crate::kinematics::{self, ActuatedAngles, JointAngles};
-use crate::link::{
-    self, DevicePacing, DeviceRecord, LinkError, Received, Session, SessionState, StopCause,
-};
+use crate::link::{LinkError, Received, Session, SessionState, StopCause};
 use crate::protocol::{Command as DeviceCommand, ControlType};
-use crate::safety::{check_device, AreboViolation, SafetyLimits};
+use crate::safety::{check_device, AreboViolation};
 use limb_kernel::geometry::{Pose, Wrench};
 use limb_kernel::{Command, PathSample, StopCategory};
 use limb_session::{ArrivalClock, Frame, Robot, Sensed};
 use nalgebra::{Rotation3, Vector3};
 use std::collections::VecDeque;
-use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 /// Frame S in R0: the cuff centre at the first frame, x toward the
@@ -354,33 +350,6 @@ impl Robot for AreboRobot {
 }
 
 impl limb_session::log::Logged for AreboRobot {}
-
-/// AREBO on a fresh pseudo-terminal whose simulated device holds the
-/// kernel's reference arm at the wrist (`held_arm::HeldArm::reference`, no
-/// backlash), lock-stepped with the host for at most `frames` frames: the
-/// device's thread and the robot, in torque mode, on the device's clock
-/// (no freshness check of the link's on the host's clock: the kernel
-/// judges). What the tests and `limb arebo serve --held-arm --lock-step`
-/// + `run --kernel --clock robot` run.
-///
-/// # Errors
-/// [`LinkError`] when no pty can be opened or the device does not confirm
-/// torque mode.
-pub fn on_simulated_held_arm(
-    frames: usize,
-) -> Result<(JoinHandle<DeviceRecord>, AreboRobot), LinkError> {
-    let pty = link::pseudo_terminal()?;
-    let device = link::spawn_held_arm(
-        pty.device.try_clone_native()?,
-        frames,
-        DevicePacing::LockStep,
-    )?;
-    let session = Session::open(&pty.path, SafetyLimits::judged_by_kernel())?;
-    let mut robot =
-        AreboRobot::start(session, REFERENCE_HEADING, GravityParameters::ASSUMED, None)?;
-    robot.arrival_clock(ArrivalClock::Robot);
-    Ok((device, robot))
-}
 
 #[cfg(test)]
 mod tests {

@@ -3,9 +3,10 @@
 
 use limb_arebo::calibration::CALIBRATION_PHASE;
 use limb_arebo::control::{GravityParameters, Mode};
+use limb_arebo::device::{self, DeviceFault, FaultSwitch};
 use limb_arebo::encoder::NOMINAL_BACKLASH;
 use limb_arebo::human::ArmMass;
-use limb_arebo::link::{self, DeviceFault, FaultSwitch, Session, SessionState, StopCause};
+use limb_arebo::link::{self, Session, SessionState, StopCause};
 use limb_arebo::protocol::{Command, ControlType, Telemetry};
 use limb_arebo::recording::{self, Calibration, CalibrationSettings};
 use limb_arebo::safety::{AreboLimit, SafetyLimits};
@@ -19,7 +20,7 @@ const FRAMES_PER_PHASE: usize = (CALIBRATION_PHASE / sim::SAMPLE_PERIOD) as usiz
 
 /// The simulated person: flexion/extension, small random movements, then
 /// the accuracy polysine, from the moment the robot is gravity compensated.
-fn person() -> link::DeviceTrajectory {
+fn person() -> device::DeviceTrajectory {
     let small = sim::sphere_calibration(1);
     let motion = sim::accuracy_motion(2);
     Box::new(move |t: f64| {
@@ -42,9 +43,9 @@ fn device_and_session(
     setup: Setup,
     frames: usize,
     faults: FaultSwitch,
-) -> (std::thread::JoinHandle<link::DeviceRecord>, Session) {
+) -> (std::thread::JoinHandle<device::DeviceRecord>, Session) {
     let pty = link::pseudo_terminal().unwrap();
-    let device = link::spawn_device(
+    let device = device::spawn_device(
         pty.device.try_clone_native().unwrap(),
         setup,
         person(),
@@ -240,12 +241,12 @@ fn a_failed_write_latches_the_safe_stop() {
 fn accuracy_device() -> (
     link::PseudoTerminal,
     FaultSwitch,
-    std::thread::JoinHandle<link::DeviceRecord>,
+    std::thread::JoinHandle<device::DeviceRecord>,
 ) {
     let pty = link::pseudo_terminal().unwrap();
     let faults = FaultSwitch::default();
     let motion = sim::accuracy_motion(3);
-    let device = link::spawn_device(
+    let device = device::spawn_device(
         pty.device.try_clone_native().unwrap(),
         Setup::default(),
         Box::new(move |t| motion.at(t)),
@@ -309,7 +310,7 @@ fn device_flags_a_missing_heartbeat() {
     use std::io::{Read, Write};
     let pty = link::pseudo_terminal().unwrap();
     let motion = sim::accuracy_motion(4);
-    let device = link::spawn_device(
+    let device = device::spawn_device(
         pty.device.try_clone_native().unwrap(),
         Setup::default(),
         Box::new(move |t| motion.at(t)),
