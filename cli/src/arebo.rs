@@ -8,7 +8,7 @@
 //!   gravity compensated, records 15 s of flexion/extension and 15 s of
 //!   small random movements, fits and validates the arm model; JSON.
 //! * `limb arebo run --device PATH [--seconds S] [--alpha A] [--backlash-deg B]`:
-//!   calibrates, then runs the supervisor (unassisted, or weight support
+//!   calibrates, then runs the control step (unassisted, or weight support
 //!   with α = A) in torque mode, sending the torque target each frame;
 //!   JSON summary.
 //! * `limb arebo run --kernel --device PATH [--seconds S] [--heading H]
@@ -38,7 +38,7 @@ use limb_arebo::recording::{self, Calibration, CalibrationError, CalibrationSett
 use limb_arebo::robot::{AreboRobot, AreboStop};
 use limb_arebo::safety::SafetyLimits;
 use limb_arebo::sim;
-use limb_arebo::supervisor::{Output, Sample, Supervisor};
+use limb_arebo::supervisor::{ControlStep, Output, Sample};
 use limb_session::{ArrivalClock, SessionPlan};
 use serde_json::json;
 use std::path::{Path, PathBuf};
@@ -78,7 +78,7 @@ pub enum AreboCommand {
         #[arg(long, default_value_t = 1.0)]
         backlash_deg: f64,
     },
-    /// Calibrate, then run the supervisor (unassisted or weight support).
+    /// Calibrate, then run the control step (unassisted or weight support).
     Run {
         /// Serial device path.
         #[arg(long)]
@@ -391,7 +391,7 @@ fn stream(device: &Path, seconds: f64, alpha: f64, backlash_deg: f64) -> Result<
         mass: 2.0,
         centre_of_mass: 0.15,
     };
-    let mut supervisor = Supervisor::new(
+    let mut control_step = ControlStep::new(
         model,
         arm,
         GravityParameters::ASSUMED,
@@ -422,7 +422,7 @@ fn stream(device: &Path, seconds: f64, alpha: f64, backlash_deg: f64) -> Result<
                 torques: nalgebra::Vector3::from(frame.telemetry.torques.map(f64::from)),
                 time: frame.time,
             };
-            match supervisor.step(Some(&sample), session.now(), mode) {
+            match control_step.step(Some(&sample), session.now(), mode) {
                 Output::Target { desired, angles } => {
                     last_angles = Some(angles);
                     let target = [desired.x as f32, desired.y as f32, desired.z as f32];

@@ -11,7 +11,7 @@ use limb_arebo::protocol::{Command, ControlType, Telemetry};
 use limb_arebo::recording::{self, Calibration, CalibrationSettings};
 use limb_arebo::safety::{AreboLimit, SafetyLimits};
 use limb_arebo::sim::{self, Setup};
-use limb_arebo::supervisor::{Output, Sample, Supervisor};
+use limb_arebo::supervisor::{ControlStep, Output, Sample};
 use limb_kernel::config::Interval;
 use limb_kernel::monitor::Limit;
 use std::time::{Duration, Instant};
@@ -135,7 +135,7 @@ fn calibration_and_tracking_over_the_pty() {
 }
 
 /// REQ-ADP-002: Finding 7 of issue 18: when the device reports the host's heartbeat
-/// missing (it has stopped assisting), the supervisor stops in the next
+/// missing (it has stopped assisting), the control step stops in the next
 /// frame, and the session commands the motors off.
 #[test]
 fn a_device_that_stopped_assisting_stops_the_supervisor() {
@@ -145,7 +145,7 @@ fn a_device_that_stopped_assisting_stops_the_supervisor() {
     let (device, mut session) =
         device_and_session(Setup::default(), 20 * FRAMES_PER_PHASE, faults.clone());
     let calibration = recording::calibrate(&mut session, &CalibrationSettings::default()).unwrap();
-    let mut supervisor = Supervisor::new(
+    let mut control_step = ControlStep::new(
         calibration.model,
         ArmMass {
             mass: 2.0,
@@ -157,7 +157,7 @@ fn a_device_that_stopped_assisting_stops_the_supervisor() {
         // accuracy motion has brushed the default −20° flexion bound (CI
         // saw −20.6° under weight support). Freshness and joint limits are
         // tested elsewhere (`safety.rs`); here only the device's bits may
-        // stop the supervisor.
+        // stop the control step.
         SafetyLimits {
             stale_after: 1.0,
             flexion: Interval::new((-45f64).to_radians(), 150f64.to_radians()),
@@ -175,7 +175,7 @@ fn a_device_that_stopped_assisting_stops_the_supervisor() {
                 torques: nalgebra::Vector3::from(frame.telemetry.torques.map(f64::from)),
                 time: frame.time,
             };
-            match supervisor.step(
+            match control_step.step(
                 Some(&sample),
                 session.now(),
                 Mode::WeightSupport { alpha: 0.5 },
