@@ -18,13 +18,15 @@
 //!                                   │           safety (typed verdicts)
 //!                    supervisor (one frame → τ_d or a latched safe stop)
 //!                    protocol (framing, streaming decoder)
+//!                    sagittal (the kernel's frame S in R0)
 //! ```
 //! With `std`: [`link`] (the serial session), [`recording`] (calibration
 //! over a session) and [`robot`] (AREBO as the robot of a `limb-session`
 //! session: the kernel's Grasp → Estimate → Validated → Manipulate loop).
 //!
 //! Frames: R0 is the robot base (z up, gravity −z); H0 is the human base
-//! frame, R0 rotated about x_R0 by ψx and translated to the shoulder centre.
+//! frame, R0 rotated about x_R0 by ψx and translated to the shoulder centre;
+//! S is the kernel's sagittal frame ([`sagittal`]).
 //! All quantities SI (m, rad, N, N m, s) unless a name says otherwise.
 //!
 //! With the `sim` feature the crate also carries the simulations: `sim`,
@@ -52,6 +54,7 @@ pub mod recording;
 #[cfg(feature = "std")]
 pub mod robot;
 pub mod safety;
+pub mod sagittal;
 #[cfg(feature = "sim")]
 pub mod sim;
 pub mod supervisor;
