@@ -8,7 +8,7 @@
 //!   gravity compensated, records 15 s of flexion/extension and 15 s of
 //!   small random movements, fits and validates the arm model; JSON.
 //! * `limb arebo run --device PATH [--seconds S] [--alpha A] [--backlash-deg B]`:
-//!   calibrates, then runs the supervisor (unassisted, or weight support
+//!   calibrates, then runs the control step (unassisted, or weight support
 //!   with α = A) in torque mode, sending the torque target each frame;
 //!   JSON summary.
 //! * `limb arebo run --kernel --device PATH [--seconds S] [--heading H]
@@ -30,16 +30,15 @@ use crate::session_log::{run_robot, SessionArgs};
 use clap::Subcommand;
 use limb_arebo::calibration::{ValidatedArmModel, CALIBRATION_PHASE};
 use limb_arebo::control::{GravityParameters, Mode};
+use limb_arebo::device::{self, DevicePacing, FaultSwitch};
 use limb_arebo::human::ArmMass;
-use limb_arebo::link::{
-    self, DevicePacing, FaultSwitch, LinkError, Session, SessionState, StopCause,
-};
+use limb_arebo::link::{self, LinkError, Session, SessionState, StopCause};
 use limb_arebo::protocol::{Command, ControlType};
 use limb_arebo::recording::{self, Calibration, CalibrationError, CalibrationSettings};
 use limb_arebo::robot::{AreboRobot, AreboStop};
 use limb_arebo::safety::SafetyLimits;
 use limb_arebo::sim;
-use limb_arebo::supervisor::{Output, Sample, Supervisor};
+use limb_arebo::supervisor::{ControlStep, Output, Sample};
 use limb_session::{ArrivalClock, SessionPlan};
 use serde_json::json;
 use std::path::{Path, PathBuf};
@@ -79,7 +78,7 @@ pub enum AreboCommand {
         #[arg(long, default_value_t = 1.0)]
         backlash_deg: f64,
     },
-    /// Calibrate, then run the supervisor (unassisted or weight support).
+    /// Calibrate, then run the control step (unassisted or weight support).
     Run {
         /// Serial device path.
         #[arg(long)]
@@ -197,7 +196,7 @@ fn serve(seconds: f64, held_arm: bool, lock_step: bool) -> Result<(), CliError> 
     println!("{}", pty.path.display());
     let handle = match (held_arm, lock_step) {
         (false, true) => return Err(CliError::BadInput("--lock-step needs --held-arm".into())),
-        (false, false) => link::spawn_device(
+        (false, false) => device::spawn_device(
             device,
             sim::Setup::default(),
             trajectory,
@@ -205,7 +204,7 @@ fn serve(seconds: f64, held_arm: bool, lock_step: bool) -> Result<(), CliError> 
             period,
             FaultSwitch::default(),
         ),
-        (true, lock_step) => link::spawn_held_arm(
+        (true, lock_step) => device::spawn_held_arm(
             device,
             frames,
             if lock_step {
@@ -392,7 +391,7 @@ fn stream(device: &Path, seconds: f64, alpha: f64, backlash_deg: f64) -> Result<
         mass: 2.0,
         centre_of_mass: 0.15,
     };
-    let mut supervisor = Supervisor::new(
+    let mut control_step = ControlStep::new(
         model,
         arm,
         GravityParameters::ASSUMED,
@@ -423,7 +422,7 @@ fn stream(device: &Path, seconds: f64, alpha: f64, backlash_deg: f64) -> Result<
                 torques: nalgebra::Vector3::from(frame.telemetry.torques.map(f64::from)),
                 time: frame.time,
             };
-            match supervisor.step(Some(&sample), session.now(), mode) {
+            match control_step.step(Some(&sample), session.now(), mode) {
                 Output::Target { desired, angles } => {
                     last_angles = Some(angles);
                     let target = [desired.x as f32, desired.y as f32, desired.z as f32];

@@ -15,7 +15,7 @@
 //! 0.5 ms, contact by `plant.md`'s active-set rule (`limb_sim::contact`).
 //! The cuff's roll axis z_R5 lies along the forearm, elbow → hand.
 
-use crate::robot::SagittalFrame;
+use crate::sagittal::SagittalFrame;
 use limb_sim::contact::{self, CANDIDATES};
 use limb_sim::dynamics::{apply_transpose, arm_terms, Vec2};
 use limb_sim::ArmParameters;

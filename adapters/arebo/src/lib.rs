@@ -18,26 +18,31 @@
 //!                                   │           safety (typed verdicts)
 //!                    supervisor (one frame → τ_d or a latched safe stop)
 //!                    protocol (framing, streaming decoder)
+//!                    sagittal (the kernel's frame S in R0)
 //! ```
-//! With `std`: [`link`] (the serial session and a simulated device on a
-//! pseudo-terminal), [`recording`] (calibration over a session) and
-//! [`robot`] (AREBO as the robot of a `limb-session` session: the kernel's
-//! Grasp → Estimate → Validated → Manipulate loop).
+//! With `std`: [`link`] (the serial session), [`recording`] (calibration
+//! over a session) and [`robot`] (AREBO as the robot of a `limb-session`
+//! session: the kernel's Grasp → Estimate → Validated → Manipulate loop).
 //!
 //! Frames: R0 is the robot base (z up, gravity −z); H0 is the human base
-//! frame, R0 rotated about x_R0 by ψx and translated to the shoulder centre.
+//! frame, R0 rotated about x_R0 by ψx and translated to the shoulder centre;
+//! S is the kernel's sagittal frame ([`sagittal`]).
 //! All quantities SI (m, rad, N, N m, s) unless a name says otherwise.
 //!
-//! With the `std` feature (default) the crate also carries [`sim`], the
-//! shoulder joint model (SJM) used to reproduce the paper's experiments.
+//! With the `sim` feature the crate also carries the simulations: `sim`,
+//! the shoulder joint model (SJM) used to reproduce the paper's
+//! experiments, `held_arm`, the kernel's reference arm held at the wrist,
+//! and `device`, a simulated AREBO moving either on a pseudo-terminal.
 
 #![cfg_attr(not(feature = "std"), no_std)]
 #![forbid(unsafe_code)]
 
 pub mod calibration;
 pub mod control;
+#[cfg(feature = "sim")]
+pub mod device;
 pub mod encoder;
-#[cfg(feature = "std")]
+#[cfg(feature = "sim")]
 pub mod held_arm;
 pub mod human;
 pub mod kinematics;
@@ -49,6 +54,7 @@ pub mod recording;
 #[cfg(feature = "std")]
 pub mod robot;
 pub mod safety;
-#[cfg(feature = "std")]
+pub mod sagittal;
+#[cfg(feature = "sim")]
 pub mod sim;
 pub mod supervisor;

@@ -44,64 +44,17 @@
 
 use crate::control::{interaction_force, GravityParameters};
 use crate::encoder::{actuated_angles, Encoder};
-use crate::held_arm::REFERENCE_HEADING;
 use crate::kinematics::{self, ActuatedAngles, JointAngles};
-use crate::link::{
-    self, DevicePacing, DeviceRecord, LinkError, Received, Session, SessionState, StopCause,
-};
+use crate::link::{LinkError, Received, Session, SessionState, StopCause};
 use crate::protocol::{Command as DeviceCommand, ControlType};
-use crate::safety::{check_device, AreboViolation, SafetyLimits};
-use limb_kernel::geometry::{Pose, Wrench};
+use crate::safety::{check_device, AreboViolation};
+use crate::sagittal::SagittalFrame;
+use limb_kernel::geometry::Wrench;
 use limb_kernel::{Command, PathSample, StopCategory};
 use limb_session::{ArrivalClock, Frame, Robot, Sensed};
-use nalgebra::{Rotation3, Vector3};
+use nalgebra::Vector3;
 use std::collections::VecDeque;
-use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
-
-/// Frame S in R0: the cuff centre at the first frame, x toward the
-/// shoulder at `heading` about z_R0, z up.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SagittalFrame {
-    /// Origin of S in R0 [m].
-    pub origin: Vector3<f64>,
-    /// R0 → S rotation (about z_R0 by −heading).
-    to_s: Rotation3<f64>,
-}
-
-impl SagittalFrame {
-    /// Frame S at `origin` (R0, m) with its x axis at `heading` [rad]
-    /// about z_R0.
-    pub fn new(origin: Vector3<f64>, heading: f64) -> Self {
-        Self {
-            origin,
-            to_s: Rotation3::from_axis_angle(&Vector3::z_axis(), -heading),
-        }
-    }
-
-    /// Grasp pose in S and lateral y [m] of a cuff at `centre` (R0) whose
-    /// forearm axis (elbow → hand) is `forearm` (R0, any length).
-    pub fn pose(&self, centre: &Vector3<f64>, forearm: &Vector3<f64>) -> (Pose, f64) {
-        let p = self.to_s * (centre - self.origin);
-        let a = self.to_s * forearm;
-        (Pose::new(p.x, p.z, libm::atan2(a.z, -a.x)), p.y)
-    }
-
-    /// A force in R0 expressed in S (x, z components and y).
-    pub fn in_s(&self, force: &Vector3<f64>) -> Vector3<f64> {
-        self.to_s * force
-    }
-
-    /// A vector in S expressed in R0.
-    pub fn from_s(&self, vector: &Vector3<f64>) -> Vector3<f64> {
-        self.to_s.inverse() * vector
-    }
-
-    /// The force (fx, fz) of a planar wrench in S, in R0 (ty dropped).
-    pub fn to_r0(&self, wrench: &Wrench) -> Vector3<f64> {
-        self.from_s(&Vector3::new(wrench.fx, 0.0, wrench.fz))
-    }
-}
 
 /// The forearm axis z_R5 (R0, unit) of a frame's counts.
 pub fn forearm_axis(counts: &[i32; 5]) -> Vector3<f64> {
@@ -355,33 +308,6 @@ impl Robot for AreboRobot {
 
 impl limb_session::log::Logged for AreboRobot {}
 
-/// AREBO on a fresh pseudo-terminal whose simulated device holds the
-/// kernel's reference arm at the wrist (`held_arm::HeldArm::reference`, no
-/// backlash), lock-stepped with the host for at most `frames` frames: the
-/// device's thread and the robot, in torque mode, on the device's clock
-/// (no freshness check of the link's on the host's clock: the kernel
-/// judges). What the tests and `limb arebo serve --held-arm --lock-step`
-/// + `run --kernel --clock robot` run.
-///
-/// # Errors
-/// [`LinkError`] when no pty can be opened or the device does not confirm
-/// torque mode.
-pub fn on_simulated_held_arm(
-    frames: usize,
-) -> Result<(JoinHandle<DeviceRecord>, AreboRobot), LinkError> {
-    let pty = link::pseudo_terminal()?;
-    let device = link::spawn_held_arm(
-        pty.device.try_clone_native()?,
-        frames,
-        DevicePacing::LockStep,
-    )?;
-    let session = Session::open(&pty.path, SafetyLimits::judged_by_kernel())?;
-    let mut robot =
-        AreboRobot::start(session, REFERENCE_HEADING, GravityParameters::ASSUMED, None)?;
-    robot.arrival_clock(ArrivalClock::Robot);
-    Ok((device, robot))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -390,25 +316,6 @@ mod tests {
 
     fn frame() -> SagittalFrame {
         SagittalFrame::new(Vector3::new(0.4, 0.1, -0.2), 2.0)
-    }
-
-    /// A cuff moved by (dx, dz) in S along S's axes, its forearm at ψ,
-    /// reads back as that pose, lateral 0.
-    #[test]
-    fn a_cuff_in_the_sagittal_plane_reads_as_its_pose_in_s() {
-        let s = frame();
-        let x = Vector3::new(libm::cos(2.0), libm::sin(2.0), 0.0);
-        let z = Vector3::z();
-        for (dx, dz, psi) in [(0.0, 0.0, 0.0), (0.05, 0.12, 0.7), (-0.02, 0.3, -0.2)] {
-            let centre = s.origin + x * dx + z * dz;
-            // Elbow → hand: (−cos ψ, sin ψ) in S.
-            let forearm = -x * libm::cos(psi) + z * libm::sin(psi);
-            let (pose, lateral) = s.pose(&centre, &(forearm * 3.0));
-            assert!((pose.x - dx).abs() < 1e-12, "{pose:?}");
-            assert!((pose.z - dz).abs() < 1e-12, "{pose:?}");
-            assert!((pose.psi - psi).abs() < 1e-12, "{pose:?}");
-            assert!(lateral.abs() < 1e-12);
-        }
     }
 
     /// The forearm axis from θ4, θ5 of the counts is R5's z axis.

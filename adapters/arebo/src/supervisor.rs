@@ -22,7 +22,7 @@ use crate::safety::{self, AreboLimit, AreboViolation, SafetyLimits};
 use limb_kernel::monitor::Limit;
 use nalgebra::Vector3;
 
-/// One decoded stream frame, as the supervisor needs it.
+/// One decoded stream frame, as the control step needs it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sample {
     /// The device's status byte (streaming, control type).
@@ -51,9 +51,11 @@ pub enum Output {
     SafeStop(AreboViolation),
 }
 
-/// The host-side control step.
+/// The host-side control step of `limb arebo run`: the paper's control
+/// modes behind the safety verdicts, latching the first verdict. (Not a
+/// `limb_session::Supervisor`, which requests the kernel's transitions.)
 #[derive(Clone, Copy, Debug)]
-pub struct Supervisor {
+pub struct ControlStep {
     model: ValidatedArmModel,
     arm: ArmMass,
     gravity: GravityParameters,
@@ -70,8 +72,8 @@ fn violation(limit: Limit, value: f64, bound: f64) -> AreboViolation {
     }
 }
 
-impl Supervisor {
-    /// A supervisor for a validated arm model (the only way to have one).
+impl ControlStep {
+    /// A control step for a validated arm model (the only way to have one).
     pub fn new(
         model: ValidatedArmModel,
         arm: ArmMass,
@@ -197,12 +199,12 @@ mod tests {
         }
     }
 
-    fn supervisor(model: ValidatedArmModel) -> Supervisor {
+    fn control_step(model: ValidatedArmModel) -> ControlStep {
         let arm = ArmMass {
             mass: 2.0,
             centre_of_mass: 0.15,
         };
-        Supervisor::new(
+        ControlStep::new(
             model,
             arm,
             GravityParameters::ASSUMED,
@@ -214,7 +216,7 @@ mod tests {
     #[test]
     fn nominal_frames_give_targets_and_verdicts_latch() {
         let model = model();
-        let mut s = supervisor(model);
+        let mut s = control_step(model);
         let phi = ShoulderAngles {
             flexion: 0.7,
             abduction: 0.2,
@@ -253,7 +255,7 @@ mod tests {
             abduction: 0.2,
         };
         let mode = Mode::WeightSupport { alpha: 0.5 };
-        let mut s = supervisor(model);
+        let mut s = control_step(model);
         let mut frame = sample_at(&model, phi, Vector3::zeros(), 1.0);
         assert!(matches!(
             s.step(Some(&frame), 1.0, mode),
@@ -264,7 +266,7 @@ mod tests {
             s.step(Some(&frame), 1.0, mode),
             Output::SafeStop(v) if v.limit == AreboLimit::DeviceHeartbeatMissing
         ));
-        let mut s = supervisor(model);
+        let mut s = control_step(model);
         let mut off = sample_at(&model, phi, Vector3::zeros(), 1.0);
         off.status = crate::protocol::status_byte(true, ControlType::Off);
         assert!(matches!(
@@ -276,7 +278,7 @@ mod tests {
     #[test]
     fn arm_limits_and_force_limits_stop() {
         let model = model();
-        let mut s = supervisor(model);
+        let mut s = control_step(model);
         let wide = sample_at(
             &model,
             ShoulderAngles {
@@ -289,7 +291,7 @@ mod tests {
         assert!(
             matches!(s.step(Some(&wide), 0.0, Mode::Unassisted), Output::SafeStop(v) if v.limit == AreboLimit::Abduction)
         );
-        let mut s = supervisor(model);
+        let mut s = control_step(model);
         let shove = sample_at(
             &model,
             ShoulderAngles {
@@ -303,7 +305,7 @@ mod tests {
             s.step(Some(&shove), 0.0, Mode::Unassisted),
             Output::SafeStop(v) if v.limit == AreboLimit::Kernel(Limit::ForceMagnitude)
         ));
-        let mut s = supervisor(model);
+        let mut s = control_step(model);
         assert!(matches!(
             s.step(None, 0.0, Mode::Unassisted),
             Output::SafeStop(_)

@@ -3,14 +3,15 @@
 
 use limb_arebo::calibration::CALIBRATION_PHASE;
 use limb_arebo::control::{GravityParameters, Mode};
+use limb_arebo::device::{self, DeviceFault, FaultSwitch};
 use limb_arebo::encoder::NOMINAL_BACKLASH;
 use limb_arebo::human::ArmMass;
-use limb_arebo::link::{self, DeviceFault, FaultSwitch, Session, SessionState, StopCause};
+use limb_arebo::link::{self, Session, SessionState, StopCause};
 use limb_arebo::protocol::{Command, ControlType, Telemetry};
 use limb_arebo::recording::{self, Calibration, CalibrationSettings};
 use limb_arebo::safety::{AreboLimit, SafetyLimits};
 use limb_arebo::sim::{self, Setup};
-use limb_arebo::supervisor::{Output, Sample, Supervisor};
+use limb_arebo::supervisor::{ControlStep, Output, Sample};
 use limb_kernel::config::Interval;
 use limb_kernel::monitor::Limit;
 use std::time::{Duration, Instant};
@@ -19,7 +20,7 @@ const FRAMES_PER_PHASE: usize = (CALIBRATION_PHASE / sim::SAMPLE_PERIOD) as usiz
 
 /// The simulated person: flexion/extension, small random movements, then
 /// the accuracy polysine, from the moment the robot is gravity compensated.
-fn person() -> link::DeviceTrajectory {
+fn person() -> device::DeviceTrajectory {
     let small = sim::sphere_calibration(1);
     let motion = sim::accuracy_motion(2);
     Box::new(move |t: f64| {
@@ -42,9 +43,9 @@ fn device_and_session(
     setup: Setup,
     frames: usize,
     faults: FaultSwitch,
-) -> (std::thread::JoinHandle<link::DeviceRecord>, Session) {
+) -> (std::thread::JoinHandle<device::DeviceRecord>, Session) {
     let pty = link::pseudo_terminal().unwrap();
-    let device = link::spawn_device(
+    let device = device::spawn_device(
         pty.device.try_clone_native().unwrap(),
         setup,
         person(),
@@ -134,7 +135,7 @@ fn calibration_and_tracking_over_the_pty() {
 }
 
 /// REQ-ADP-002: Finding 7 of issue 18: when the device reports the host's heartbeat
-/// missing (it has stopped assisting), the supervisor stops in the next
+/// missing (it has stopped assisting), the control step stops in the next
 /// frame, and the session commands the motors off.
 #[test]
 fn a_device_that_stopped_assisting_stops_the_supervisor() {
@@ -144,7 +145,7 @@ fn a_device_that_stopped_assisting_stops_the_supervisor() {
     let (device, mut session) =
         device_and_session(Setup::default(), 20 * FRAMES_PER_PHASE, faults.clone());
     let calibration = recording::calibrate(&mut session, &CalibrationSettings::default()).unwrap();
-    let mut supervisor = Supervisor::new(
+    let mut control_step = ControlStep::new(
         calibration.model,
         ArmMass {
             mass: 2.0,
@@ -156,7 +157,7 @@ fn a_device_that_stopped_assisting_stops_the_supervisor() {
         // accuracy motion has brushed the default −20° flexion bound (CI
         // saw −20.6° under weight support). Freshness and joint limits are
         // tested elsewhere (`safety.rs`); here only the device's bits may
-        // stop the supervisor.
+        // stop the control step.
         SafetyLimits {
             stale_after: 1.0,
             flexion: Interval::new((-45f64).to_radians(), 150f64.to_radians()),
@@ -174,7 +175,7 @@ fn a_device_that_stopped_assisting_stops_the_supervisor() {
                 torques: nalgebra::Vector3::from(frame.telemetry.torques.map(f64::from)),
                 time: frame.time,
             };
-            match supervisor.step(
+            match control_step.step(
                 Some(&sample),
                 session.now(),
                 Mode::WeightSupport { alpha: 0.5 },
@@ -240,12 +241,12 @@ fn a_failed_write_latches_the_safe_stop() {
 fn accuracy_device() -> (
     link::PseudoTerminal,
     FaultSwitch,
-    std::thread::JoinHandle<link::DeviceRecord>,
+    std::thread::JoinHandle<device::DeviceRecord>,
 ) {
     let pty = link::pseudo_terminal().unwrap();
     let faults = FaultSwitch::default();
     let motion = sim::accuracy_motion(3);
-    let device = link::spawn_device(
+    let device = device::spawn_device(
         pty.device.try_clone_native().unwrap(),
         Setup::default(),
         Box::new(move |t| motion.at(t)),
@@ -309,7 +310,7 @@ fn device_flags_a_missing_heartbeat() {
     use std::io::{Read, Write};
     let pty = link::pseudo_terminal().unwrap();
     let motion = sim::accuracy_motion(4);
-    let device = link::spawn_device(
+    let device = device::spawn_device(
         pty.device.try_clone_native().unwrap(),
         Setup::default(),
         Box::new(move |t| motion.at(t)),

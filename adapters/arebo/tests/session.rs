@@ -5,10 +5,11 @@
 //! holds in Grasp until a fault.
 
 use limb_arebo::control::GravityParameters;
+use limb_arebo::device::{self, on_simulated_held_arm, DeviceFault, FaultSwitch};
 use limb_arebo::human::ShoulderAngles;
-use limb_arebo::link::{self, DeviceFault, FaultSwitch, Session};
+use limb_arebo::link::{self, Session};
 use limb_arebo::protocol::ControlType;
-use limb_arebo::robot::{on_simulated_held_arm, AreboRobot, AreboStop};
+use limb_arebo::robot::{AreboRobot, AreboStop};
 use limb_arebo::safety::{AreboLimit, SafetyLimits};
 use limb_arebo::sim::{Setup, SAMPLE_PERIOD};
 use limb_kernel::trace::TraceEvent;
@@ -58,7 +59,7 @@ impl<R: ?Sized> Observer<R> for Events {
 /// AREBO in torque mode on it, on the host's clock. The link's own
 /// freshness check is set past the kernel's sensor-age limit
 /// (`judged_by_kernel`): the kernel's watchdog decides.
-fn robot(faults: FaultSwitch) -> (std::thread::JoinHandle<link::DeviceRecord>, AreboRobot) {
+fn robot(faults: FaultSwitch) -> (std::thread::JoinHandle<device::DeviceRecord>, AreboRobot) {
     let pty = link::pseudo_terminal().unwrap();
     let still = Box::new(|_: f64| {
         let pose = ShoulderAngles {
@@ -67,7 +68,7 @@ fn robot(faults: FaultSwitch) -> (std::thread::JoinHandle<link::DeviceRecord>, A
         };
         (pose, [0.0; 2])
     });
-    let device = link::spawn_device(
+    let device = device::spawn_device(
         pty.device.try_clone_native().unwrap(),
         Setup::default(),
         still,

@@ -9,7 +9,7 @@
 mod common;
 
 use common::{connect, key, link_settings, wait_until, RigOptions, TIMEOUT};
-use limb_arebo::robot::on_simulated_held_arm;
+use limb_arebo::device::on_simulated_held_arm;
 use limb_kernel::arm::JointAngles;
 use limb_kernel::{KernelConfig, StateKind};
 use limb_kuka::loopback::run_loopback;
