@@ -1,7 +1,8 @@
 //! Driving the plant from a controller's commands, one control period at a
 //! time (shared by `limb run` and the simulated KUKA FRI controller).
 
-use crate::plant::{Measurement, Plant, Truth, STEP};
+use crate::plant::{Plant, Truth};
+use crate::sensing::{Measurement, STEP};
 use limb_kernel::motion::SetPoint;
 
 /// A plant the kernel can close the loop on.

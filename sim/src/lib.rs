@@ -42,9 +42,9 @@ pub mod params;
 pub mod plant;
 pub mod robot;
 pub mod scripted;
+pub mod sensing;
 
 pub use effects::{Effect, EffectError, Effects};
 pub use params::{ArmParameters, PlantParameters, RobotParameters, BENCHMARK_ARMS};
-pub use plant::{
-    Measurement, Plant, Truth, ANGLE_NOISE, FORCE_NOISE, POSITION_NOISE, STEP, TORQUE_NOISE,
-};
+pub use plant::{Plant, Truth};
+pub use sensing::{Measurement, ANGLE_NOISE, FORCE_NOISE, POSITION_NOISE, STEP, TORQUE_NOISE};

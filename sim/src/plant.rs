@@ -31,37 +31,14 @@ use crate::dynamics::{apply, apply_transpose, arm_terms, arm_terms_with_rod, Vec
 use crate::effects::{Effects, Spasticity};
 use crate::noise::Gaussian;
 use crate::params::PlantParameters;
+use crate::sensing::{
+    Measurement, ANGLE_NOISE, FORCE_NOISE, POSITION_NOISE, POTENTIOMETER_RESOLUTION, STEP,
+    TORQUE_NOISE,
+};
 use alloc::collections::VecDeque;
 use alloc::string::String;
 use limb_kernel::geometry::{Point, Pose, Wrench};
 use limb_kernel::motion::SetPoint;
-
-/// Integration step [s] (0.5 ms).
-pub const STEP: f64 = 0.0005;
-/// Measurement noise σ of `plant.md`: position x, z, y [m] (iiwa
-/// repeatability).
-pub const POSITION_NOISE: f64 = 1e-4;
-/// Measurement noise σ of psi [rad].
-pub const ANGLE_NOISE: f64 = 1e-3;
-/// Measurement noise σ of the forces fx, fz [N].
-pub const FORCE_NOISE: f64 = 0.5;
-/// Measurement noise σ of the torque ty [N m].
-pub const TORQUE_NOISE: f64 = 0.025;
-/// Resolution of the ground-truth potentiometers [rad] (10 bit).
-pub const POTENTIOMETER_RESOLUTION: f64 = 0.0047;
-
-/// What the robot measures, frame S.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Measurement {
-    /// Time [s].
-    pub time: f64,
-    /// Grasp pose [m, m, rad].
-    pub pose: Pose,
-    /// Lateral position y [m] (zero plus noise in the plane of S).
-    pub lateral: f64,
-    /// External wrench estimate f_ext [N, N, N m].
-    pub wrench: Wrench,
-}
 
 /// Ground truth of the dummy arm.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -8,7 +8,7 @@
 //! own columns (`q1,q2,elbow_x,elbow_z,shoulder_x,shoulder_z`).
 
 use crate::closed_loop::ClosedLoopPlant;
-use crate::plant::Measurement;
+use crate::sensing::Measurement;
 use core::convert::Infallible;
 use limb_kernel::motion::SetPoint;
 use limb_kernel::{Command, PathSample, StopCategory};

@@ -3,7 +3,8 @@
 //! grasp pose, a row is logged every [`LOG_EVERY`] steps (100 Hz) before
 //! that step's integration, until the lift and its hold are over.
 
-use crate::plant::{Measurement, Plant, Truth, STEP};
+use crate::plant::{Plant, Truth};
+use crate::sensing::{Measurement, STEP};
 use alloc::format;
 use alloc::string::String;
 use alloc::vec::Vec;

@@ -22,7 +22,7 @@ use limb_sim::ArmParameters;
 use nalgebra::Vector3;
 
 /// Integration step [s] (`plant.md`).
-pub const STEP: f64 = limb_sim::plant::STEP;
+pub const STEP: f64 = limb_sim::sensing::STEP;
 /// The robot's inertia lumped at the cuff, x and z [kg] (`plant.md`'s Λ).
 pub const CUFF_INERTIA: f64 = 2.0;
 

@@ -6,7 +6,7 @@
 //! time of measurement.
 
 use super::Parameter;
-use crate::plant::STEP;
+use crate::sensing::STEP;
 
 /// Parameters: delay [s].
 pub const PARAMETERS: [Parameter; 1] = [Parameter::new(

@@ -10,7 +10,7 @@
 //! `sin_cos` (and the expected rounding its `round`), as the diagnosis
 //! always has, so that its answers stay the same to the last bit.
 
-use crate::plant::Measurement;
+use crate::sensing::Measurement;
 
 /// Effects that only change what is measured: those [`measured`] applies.
 pub const MEASUREMENT_SIDE: [&str; 5] = [

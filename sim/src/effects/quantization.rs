@@ -5,7 +5,7 @@
 
 use super::Parameter;
 #[cfg(feature = "std")]
-use crate::plant::{ANGLE_NOISE, POSITION_NOISE};
+use crate::sensing::{ANGLE_NOISE, POSITION_NOISE};
 
 /// Parameters: pos [m], ang [rad].
 pub const PARAMETERS: [Parameter; 2] = [
