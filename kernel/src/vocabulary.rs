@@ -5,7 +5,7 @@
 //!
 //! Everything a person or a tool reads is spelled from here: the CLI's
 //! text and JSON, the session digest the firmware compares with the host,
-//! the Zenoh wire (`limb-zenoh`'s `kernel_wire` takes its names from
+//! the Zenoh wire (`limb-session`'s `kernel_wire` takes its names from
 //! these functions), AREBO's output. No `Debug` formatting of a kernel
 //! value reaches a user, a wire or the digest (tested in
 //! `cli/tests/vocabulary.rs`). Names never change once released; a new

@@ -33,6 +33,8 @@
 pub mod clock;
 pub mod command_hash;
 pub mod digest;
+#[cfg(feature = "serde")]
+pub mod kernel_wire;
 #[cfg(feature = "std")]
 pub mod log;
 #[cfg(feature = "mcap")]

@@ -21,12 +21,12 @@
 //! (times of events stamped at a faulty clock); readers treat them as
 //! missing.
 
-use crate::kernel_wire::{
-    CommandReport, Fault, Frame, Joints, KernelEvent, KernelRefusal, PlanarPoint, State,
-};
 use limb_kernel::arm::ArmGeometry;
 use limb_kernel::config::SafetyLimits;
 use limb_kernel::KernelConfig;
+use limb_session::kernel_wire::{
+    CommandReport, Fault, Frame, Joints, KernelEvent, KernelRefusal, PlanarPoint, State,
+};
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
@@ -407,7 +407,7 @@ pub struct NodeCounters {
     /// last accepted one (replays, or a supervisor whose clock is behind).
     pub heartbeats_replayed: u64,
     /// Emergency stops applied whose ack was dropped (more than
-    /// [`crate::link::ESTOP_QUEUE`] in one control period).
+    /// [`crate::supervision::ESTOP_QUEUE`] in one control period).
     pub estop_acks_dropped: u64,
 }
 

@@ -16,8 +16,8 @@ use limb_kernel::trace::{Cause, Event, TraceEvent};
 use limb_kernel::validate::Rejection;
 use limb_kernel::RefusalReason;
 use limb_kernel::{Command, PathSample, Refusal, Request, StateKind, StopReason};
+use limb_session::kernel_wire::{Joints, KernelRefusal, PlanarPoint};
 use limb_zenoh::auth::CommandKey;
-use limb_zenoh::kernel_wire::{Joints, KernelRefusal, PlanarPoint};
 use limb_zenoh::keys::Keys;
 use limb_zenoh::wire::{
     Ack, AckOutcome, AckSubject, ArmModel, CommandMessage, EmergencyStopMessage, EventMessage,
@@ -60,7 +60,7 @@ fn refusal(reason: RefusalReason) -> KernelRefusal {
     .into()
 }
 
-fn command_report() -> limb_zenoh::kernel_wire::CommandReport {
+fn command_report() -> limb_session::kernel_wire::CommandReport {
     Command {
         state: StateKind::Manipulate,
         mode: CommandMode::Track,

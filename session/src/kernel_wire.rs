@@ -1,12 +1,14 @@
 //! The wire's own spelling of what the kernel reports: states, requests,
-//! faults, events, frames and commands.
+//! faults, events, frames and commands. The Zenoh wire (`@v2`), `limb run
+//! --json` and the CLI's reports all spell kernel values with it, so it
+//! lives here, beside the session loop, not in any one adapter.
 //!
 //! The kernel's serde names are its Rust names (PascalCase, externally
 //! tagged), so a renamed kernel variant would silently change `@v2`. Every
 //! kernel value therefore goes through a type of this module, built by an
 //! exhaustive `match`: a renamed or added kernel variant stops this crate
 //! from compiling, and a changed spelling breaks the golden-message test
-//! (`tests/golden.rs`), never a deployed supervisor.
+//! (`adapters/zenoh/tests/golden.rs`), never a deployed supervisor.
 //!
 //! Faults (stop reasons, refusals, estimation, plan, target and
 //! configuration errors) are one shape, [`Fault`]: the kernel's stable
