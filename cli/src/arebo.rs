@@ -26,7 +26,7 @@
 //! `run`.
 
 use crate::error::{print_json, CliError};
-use crate::session_log::{run_robot, SessionArgs};
+use crate::robot_session::{run_robot, SessionArgs};
 use clap::Subcommand;
 use limb_arebo::calibration::{ValidatedArmModel, CALIBRATION_PHASE};
 use limb_arebo::control::{GravityParameters, Mode};

@@ -3,7 +3,7 @@
 //! reached by `--plant-cmd`, `--plant-tcp` or by name (`--plant myoarm
 //! --subject NAME`, `--plant toy`).
 //!
-//! The session is the reference plant's ([`crate::run::session`]: the
+//! The session is the reference plant's ([`crate::session_report::session`]: the
 //! same loop, operator, recorder and JSON keys); the truth is what the
 //! plant's truth gives at its first frame, the joint extremes use the
 //! plant's own `shoulder_elevation`/`elbow_flexion` when it gives them,
@@ -19,9 +19,9 @@
 //! use); `toy` runs `plants/toy/toy_plant.py` with the system `python3`.
 
 use crate::arm_model::ArmModel;
-use crate::error::{emit, print_json, CliError};
-use crate::run::{human, record_event, session, RunArgs, SessionReport, TrueJoints, TruthReport};
+use crate::error::CliError;
 use crate::session_log::LogFile;
+use crate::session_report::{record_event, session, SessionReport, TrueJoints, TruthReport};
 use limb_kernel::{Kernel, KernelConfig, Request};
 use limb_plant::{Endpoint, PlantError, PlantRobot};
 use limb_session::SessionPlan;
@@ -369,42 +369,3 @@ impl TrueJoints for Idle {
 }
 
 impl limb_session::log::Logged for Idle {}
-
-/// `limb run` on the external plant at `endpoint`.
-///
-/// # Errors
-/// [`CliError::RobotFailure`] when the plant broke the protocol (after
-/// the report is printed), [`CliError::BadInput`] for an unusable
-/// configuration or log path.
-pub fn run(args: &RunArgs, endpoint: &Endpoint, config: KernelConfig) -> Result<(), CliError> {
-    let timeout = Duration::from_secs_f64(args.plant.plant_timeout);
-    let outcome = plant_session(endpoint, config, timeout, args.log.as_deref(), args.stop_at)?;
-    if args.json {
-        print_json(&outcome.json())?;
-    } else if args.digest {
-        emit(&format!("{}\n", outcome.report.digest))?;
-    } else if let Some(plant) = &outcome.plant {
-        let header = format!(
-            "limb run: external plant \"{}\" (dt {} s), kernel at {:.0} Hz, force limit {:.1} N",
-            plant.name,
-            plant.dt,
-            SessionPlan::default().rate,
-            config.limits.max_force
-        );
-        let mut text = human(&outcome.report, &header);
-        if let Some(reason) = &plant.end {
-            text.push_str(&format!("the plant ended the session: {reason}\n"));
-        }
-        if !plant.unknown_keys.is_empty() {
-            text.push_str(&format!(
-                "ignored unknown keys: {}\n",
-                plant.unknown_keys.join(", ")
-            ));
-        }
-        emit(&text)?;
-    }
-    match outcome.failure {
-        Some(error) => Err(CliError::RobotFailure(error.to_string())),
-        None => Ok(()),
-    }
-}

@@ -20,7 +20,7 @@ use std::net::SocketAddr;
 use std::time::Duration;
 
 use crate::error::{print_json, CliError};
-use crate::session_log::{run_robot, SessionArgs};
+use crate::robot_session::{run_robot, SessionArgs};
 
 /// KUKA FRI subcommands.
 #[derive(Subcommand)]

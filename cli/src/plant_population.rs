@@ -10,7 +10,7 @@
 use crate::arm_model::ArmModel;
 use crate::error::{emit, print_json, CliError};
 use crate::external::{endpoint, myoarm_command, plant_session, NamedPlant, PlantArgs, RobotError};
-use crate::run::{JointExtremes, SessionReport};
+use crate::session_report::{JointExtremes, SessionReport};
 use limb_kernel::{KernelConfig, StateKind};
 use limb_plant::Endpoint;
 use serde::Serialize;

@@ -11,7 +11,8 @@
 //! no ground truth reaches it.
 
 use crate::error::{emit, print_json, CliError};
-use crate::run::{run_session, JointExtremes, ReferencePlant, SessionPlan};
+use crate::run::{run_session, SessionPlan};
+use crate::session_report::JointExtremes;
 use limb_kernel::{Kernel, KernelConfig, StateKind};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -120,16 +121,11 @@ pub struct PopulationReport {
 fn run_arm(l1: f64, l2: f64, seed: u64, config: &KernelConfig) -> Result<ArmOutcome, CliError> {
     let mut params = limb_sim::PlantParameters::new(l1, l2);
     params.seed = seed;
-    let plant = limb_sim::Plant::new(params).map_err(CliError::Internal)?;
+    let mut plant = limb_sim::Plant::new(params).map_err(CliError::Internal)?;
     let mut kernel = Box::new(
         Kernel::new(*config).map_err(|e| CliError::Internal(format!("configuration: {e}")))?,
     );
-    let report = run_session(
-        &mut kernel,
-        &mut ReferencePlant(plant),
-        &SessionPlan::default(),
-        None,
-    );
+    let report = run_session(&mut kernel, &mut plant, &SessionPlan::default(), None);
     let estimate_joints = report
         .joint_extremes
         .get("estimate")

@@ -15,15 +15,14 @@ use crate::error::{print_json, CliError};
 use crate::session_log::LogFile;
 use clap::{Args, Subcommand, ValueEnum};
 use limb_kernel::{Kernel, KernelConfig};
+use limb_session::kernel_wire::{Joints, State};
 use limb_sim::robot::ReferenceRobot;
 use limb_zenoh::auth::CommandKey;
-use limb_zenoh::kernel_wire::{Joints, State};
-use limb_zenoh::link::{
-    Link, LinkSettings, LivenessPolicy, OnSupervisorLoss, SampleQos, Supervision,
-};
+use limb_zenoh::link::{Link, LinkSettings, SampleQos};
 use limb_zenoh::node::Node;
 use limb_zenoh::session::peer_config;
-use limb_zenoh::supervisor::Supervisor;
+use limb_zenoh::supervision::{LivenessPolicy, OnSupervisorLoss, Supervision};
+use limb_zenoh::supervisor::SupervisorStation;
 use limb_zenoh::wire::{SupervisorCommand, WireFormat};
 use limb_zenoh::AdapterError;
 use std::path::PathBuf;
@@ -264,10 +263,10 @@ fn read_key(path: &PathBuf) -> Result<CommandKey, CliError> {
         .map_err(|e| CliError::BadInput(format!("{}: {e}", path.display())))
 }
 
-fn supervisor(peer: &Peer, key: CommandKey) -> Result<Supervisor, CliError> {
+fn supervisor(peer: &Peer, key: CommandKey) -> Result<SupervisorStation, CliError> {
     let config = session_config(peer.zenoh_config.as_ref(), &[], &peer.connect)?;
-    let supervisor =
-        Supervisor::connect(config, &peer.robot, peer.format.into(), key).map_err(bad_input)?;
+    let supervisor = SupervisorStation::connect(config, &peer.robot, peer.format.into(), key)
+        .map_err(bad_input)?;
     supervisor.wait_for_node(ANSWER_TIMEOUT).map_err(internal)?;
     Ok(supervisor)
 }

@@ -7,10 +7,10 @@ use common::lift::Lift;
 use common::{connect, link_settings, rig, wait_until, RigOptions, TIMEOUT};
 use limb_kernel::config::{Interval, SafetyLimits};
 use limb_kernel::{KernelConfig, StateKind};
+use limb_session::kernel_wire::KernelEvent;
 use limb_session::Supervisor as _;
 use limb_verification::scenario::TARGET;
 use limb_zenoh::auth::CommandKey;
-use limb_zenoh::kernel_wire::KernelEvent;
 use limb_zenoh::link::Link;
 use limb_zenoh::session::{free_loopback_port, peer_config};
 use limb_zenoh::wire::{
@@ -40,7 +40,9 @@ fn refused_by_kernel(outcome: &AckOutcome) -> Option<&str> {
 /// refuses it as `arm_not_still` (the stop's set-point still on its way to
 /// rest, REQ-STOP-003), for at most 3 s: the last answer, and the refusals
 /// before it.
-fn reset_when_still(supervisor: &mut limb_zenoh::supervisor::Supervisor) -> (AckOutcome, u32) {
+fn reset_when_still(
+    supervisor: &mut limb_zenoh::supervisor::SupervisorStation,
+) -> (AckOutcome, u32) {
     let start = std::time::Instant::now();
     let mut refusals = 0;
     loop {
@@ -306,7 +308,7 @@ fn events_arrive_in_order_without_loss() {
         }
     }
     assert_eq!(kernel_refusals + busy, COMMANDS);
-    assert!(kernel_refusals >= limb_zenoh::link::COMMAND_QUEUE);
+    assert!(kernel_refusals >= limb_zenoh::supervision::COMMAND_QUEUE);
     std::thread::sleep(Duration::from_millis(100));
     let received: Vec<u64> = events.try_iter().map(Option::unwrap).collect();
     assert!(
@@ -327,8 +329,8 @@ struct Attached {
     kernel: Box<limb_kernel::Kernel>,
     lift: Lift,
     link: Link,
-    supervision: limb_zenoh::link::Supervision,
-    supervisor: limb_zenoh::supervisor::Supervisor,
+    supervision: limb_zenoh::supervision::Supervision,
+    supervisor: limb_zenoh::supervisor::SupervisorStation,
     sequence: u64,
 }
 

@@ -15,12 +15,13 @@ use limb_kernel::{KernelConfig, StateKind};
 use limb_kuka::loopback::run_loopback;
 use limb_kuka::sim_controller::SimSettings;
 use limb_kuka::FriVersion;
+use limb_session::kernel_wire::State;
 use limb_sim::robot::ReferenceRobot;
 use limb_sim::{Plant, PlantParameters};
-use limb_zenoh::kernel_wire::State;
-use limb_zenoh::link::{Link, LinkSettings, LoopView};
+use limb_zenoh::link::{Link, LinkSettings};
 use limb_zenoh::node::Node;
 use limb_zenoh::session::{free_loopback_port, peer_config};
+use limb_zenoh::supervision::LoopView;
 use limb_zenoh::wire::{AckOutcome, SupervisorCommand};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -52,7 +53,7 @@ fn one_at_a_time() -> std::sync::MutexGuard<'static, ()> {
 /// again; an ack that does not come is a failure (a resend might apply the
 /// command twice: a second estimation after the first).
 fn accepted(
-    supervisor: &mut limb_zenoh::supervisor::Supervisor,
+    supervisor: &mut limb_zenoh::supervisor::SupervisorStation,
     command: SupervisorCommand,
 ) -> State {
     let start = Instant::now();

@@ -1,6 +1,6 @@
 //! `limb soak zenoh`: a node on the reference plant (`limb zenoh node`:
 //! a `limb-session` session paced at 1 kHz, every step's sample published)
-//! and a supervisor ([`limb_zenoh::supervisor::Supervisor`], as `limb zenoh
+//! and a supervisor ([`limb_zenoh::supervisor::SupervisorStation`], as `limb zenoh
 //! send`/`estop`), each with its own Zenoh session over TCP on loopback.
 //!
 //! Each session: the supervisor starts the estimation, waits for
@@ -20,15 +20,16 @@
 use super::{counted_log, Budget, CountedLog, Ledger, LogRows, MemoryWatch, Soak};
 use crate::error::CliError;
 use limb_kernel::{Kernel, KernelConfig, StateKind, StopCategory};
+use limb_session::kernel_wire::{Cause, Joints, KernelEvent, State};
 use limb_sim::noise::Gaussian;
 use limb_sim::robot::ReferenceRobot;
 use limb_sim::{Plant, PlantParameters};
 use limb_zenoh::auth::CommandKey;
-use limb_zenoh::kernel_wire::{Cause, Joints, KernelEvent, State};
-use limb_zenoh::link::{LinkSettings, LivenessPolicy, OnSupervisorLoss, SampleQos};
+use limb_zenoh::link::{LinkSettings, SampleQos};
 use limb_zenoh::node::Node;
 use limb_zenoh::session::{free_loopback_port, peer_config};
-use limb_zenoh::supervisor::Supervisor;
+use limb_zenoh::supervision::{LivenessPolicy, OnSupervisorLoss};
+use limb_zenoh::supervisor::SupervisorStation;
 use limb_zenoh::wire::{
     AckOutcome, AckSubject, EventMessage, KernelStatus, SampleMessage, StopOrigin,
     SupervisorCommand, WireFormat,
@@ -105,7 +106,7 @@ impl Tally {
 
 /// The supervisor's subscriptions to telemetry.
 fn subscribe<T: DeserializeOwned + Send + 'static>(
-    supervisor: &Supervisor,
+    supervisor: &SupervisorStation,
     key: String,
     format: WireFormat,
     tally: &Tally,
@@ -155,7 +156,7 @@ struct Counts {
 /// The supervisor's script, the emergency stop at `estop_at` after
 /// `start` (if any).
 struct Script<'a> {
-    supervisor: &'a mut Supervisor,
+    supervisor: &'a mut SupervisorStation,
     node: &'a Node<CountedLog>,
     start: Instant,
     /// The soak's end: the script stops waiting there.
@@ -408,7 +409,7 @@ fn session(
     let connect =
         peer_config(&[], std::slice::from_ref(&endpoint), LEASE_MS).map_err(|e| internal(&e))?;
     let mut supervisor =
-        Supervisor::connect(connect, ROBOT, format, key).map_err(|e| internal(&e))?;
+        SupervisorStation::connect(connect, ROBOT, format, key).map_err(|e| internal(&e))?;
     let tally = Tally::default();
     let keys = supervisor.keys().clone();
     let _samples = subscribe(
