@@ -24,9 +24,10 @@ mod lift;
 
 use lift::Lift;
 use limb_zenoh::auth::CommandKey;
-use limb_zenoh::link::{wall_clock_ns, LinkSettings, LivenessPolicy, OnSupervisorLoss, SampleQos};
+use limb_zenoh::link::{LinkSettings, SampleQos};
 use limb_zenoh::node::Node;
 use limb_zenoh::session::{free_loopback_port, peer_config};
+use limb_zenoh::supervision::{wall_clock_ns, LivenessPolicy, OnSupervisorLoss};
 use limb_zenoh::wire::{SampleMessage, WireFormat};
 use limb_zenoh::AdapterError;
 use std::process::Command;

@@ -7,13 +7,17 @@
 //!
 //! - [`keys`]: the key expressions `limb/<robot-id>/@v2/...`;
 //! - [`wire`]: the versioned JSON / CBOR encoding of every message;
-//! - [`kernel_wire`]: the wire's own spelling of kernel states, faults,
-//!   events, frames and commands (a kernel rename cannot change `@v2`);
+//! - `limb_session::kernel_wire` (not here: `limb run --json` and the
+//!   CLI's reports spell kernel values with it too): the wire's own
+//!   spelling of kernel states, faults, events, frames and commands (a
+//!   kernel rename cannot change `@v2`);
 //! - [`auth`]: HMAC-SHA256 signatures of commands and heartbeats;
 //! - [`inbound`]: the screens every arriving command, e-stop and
 //!   heartbeat payload passes (signature, then decoding);
-//! - [`link`]: the node's Zenoh side and [`link::Supervision`], its
-//!   in-loop half (also usable from another adapter's loop);
+//! - [`link`]: the node's Zenoh side (session, subscribers, queryables,
+//!   the publisher thread);
+//! - [`supervision`]: [`supervision::Supervision`], the node's in-loop
+//!   half (also usable from another adapter's loop);
 //! - [`node`]: a `limb-session` session of any robot on its own thread,
 //!   supervised over the link;
 //! - [`supervisor`]: the supervisor's side;
@@ -31,7 +35,6 @@
 pub mod auth;
 pub mod error;
 pub mod inbound;
-pub mod kernel_wire;
 pub mod keys;
 #[cfg(feature = "link")]
 pub mod link;
@@ -39,6 +42,8 @@ pub mod link;
 pub mod node;
 #[cfg(feature = "link")]
 pub mod session;
+#[cfg(feature = "link")]
+pub mod supervision;
 #[cfg(feature = "link")]
 pub mod supervisor;
 pub mod wire;

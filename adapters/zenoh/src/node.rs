@@ -8,7 +8,8 @@
 //! overrun restarts the schedule and is counted in the status).
 
 use crate::error::AdapterError;
-use crate::link::{Link, LinkSettings, LoopView, Supervision};
+use crate::link::{Link, LinkSettings};
+use crate::supervision::{LoopView, Supervision};
 use limb_kernel::Kernel;
 use limb_session::paced::Paced;
 use limb_session::{Observer, Outcome, Robot, Unobserved};

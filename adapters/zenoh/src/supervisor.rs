@@ -7,7 +7,7 @@
 use crate::auth::CommandKey;
 use crate::error::AdapterError;
 use crate::keys::Keys;
-use crate::link::wall_clock_ns;
+use crate::supervision::wall_clock_ns;
 use crate::wire::{
     Ack, CommandMessage, EmergencyStopMessage, Heartbeat, SupervisorCommand, WireFormat,
 };
@@ -23,8 +23,10 @@ use zenoh::Wait;
 /// Acks kept until read; older ones are dropped when full.
 const ACK_QUEUE: usize = 256;
 
-/// A supervisor of one robot.
-pub struct Supervisor {
+/// A supervisor station of one robot, over Zenoh: the remote party that
+/// sends commands and e-stops (not `limb_session::Supervisor`, the
+/// in-loop role [`crate::supervision::Supervision`] plays in the robot's session).
+pub struct SupervisorStation {
     session: zenoh::Session,
     keys: Keys,
     format: WireFormat,
@@ -43,7 +45,7 @@ struct HeartbeatTask {
     thread: JoinHandle<()>,
 }
 
-impl Supervisor {
+impl SupervisorStation {
     /// Opens a session with `zenoh_config` for robot `robot_id`, signing
     /// with `key`. Sequence numbers follow the wall clock in µs (see
     /// [`next_sequence`]), so a restarted supervisor stays above what the
@@ -284,7 +286,7 @@ pub fn next_sequence(next: &mut u64) -> u64 {
     sequence
 }
 
-impl Drop for Supervisor {
+impl Drop for SupervisorStation {
     fn drop(&mut self) {
         self.stop_heartbeat();
     }

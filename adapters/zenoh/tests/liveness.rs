@@ -5,7 +5,7 @@ mod common;
 
 use common::{rig, wait_until, RigOptions, TIMEOUT};
 use limb_kernel::StateKind;
-use limb_zenoh::link::OnSupervisorLoss;
+use limb_zenoh::supervision::OnSupervisorLoss;
 use limb_zenoh::wire::{LinkMessage, WireFormat};
 use std::time::Duration;
 use zenoh::Wait;

@@ -11,7 +11,7 @@ use limb_kernel::arm::JointAngles;
 use limb_kernel::StateKind;
 use limb_zenoh::node::Node;
 use limb_zenoh::session::{client_config, free_loopback_port, router_config};
-use limb_zenoh::supervisor::Supervisor;
+use limb_zenoh::supervisor::SupervisorStation;
 use limb_zenoh::wire::{AckOutcome, SupervisorCommand};
 use zenoh::Wait;
 
@@ -33,7 +33,8 @@ fn one_station_supervises_two_nodes_through_a_router() {
         })
         .collect();
     let station = |robot: &str| {
-        let supervisor = Supervisor::connect(client(), robot, options.format, key()).unwrap();
+        let supervisor =
+            SupervisorStation::connect(client(), robot, options.format, key()).unwrap();
         supervisor.wait_for_node(TIMEOUT).unwrap();
         supervisor
     };

@@ -12,7 +12,7 @@ use common::{key, link_settings, RigOptions, ROBOT, TIMEOUT};
 use limb_kernel::StateKind;
 use limb_zenoh::node::Node;
 use limb_zenoh::session::{free_loopback_port, peer_config, set_tls, TlsFiles};
-use limb_zenoh::supervisor::Supervisor;
+use limb_zenoh::supervisor::SupervisorStation;
 use limb_zenoh::wire::{AckOutcome, SupervisorCommand, WireFormat};
 use std::path::PathBuf;
 use std::time::Duration;
@@ -35,7 +35,7 @@ fn certificates(dir: &std::path::Path) -> (PathBuf, PathBuf, PathBuf) {
     )
 }
 
-fn supervisor(endpoint: &str, root_ca: PathBuf) -> Supervisor {
+fn supervisor(endpoint: &str, root_ca: PathBuf) -> SupervisorStation {
     let mut config = peer_config(&[], &[endpoint.to_owned()], 1000).unwrap();
     set_tls(
         &mut config,
@@ -45,7 +45,7 @@ fn supervisor(endpoint: &str, root_ca: PathBuf) -> Supervisor {
         },
     )
     .unwrap();
-    Supervisor::connect(config, ROBOT, WireFormat::Json, key()).unwrap()
+    SupervisorStation::connect(config, ROBOT, WireFormat::Json, key()).unwrap()
 }
 
 #[test]

@@ -12,7 +12,7 @@ use limb_verification::scenario::TARGET;
 use limb_zenoh::keys::Keys;
 use limb_zenoh::node::Node;
 use limb_zenoh::session::{free_loopback_port, peer_config, protect_commands, set_credentials};
-use limb_zenoh::supervisor::Supervisor;
+use limb_zenoh::supervisor::SupervisorStation;
 use limb_zenoh::wire::{AckOutcome, SupervisorCommand};
 use limb_zenoh::AdapterError;
 use std::time::Duration;
@@ -55,7 +55,7 @@ fn access_control_drops_an_observers_command_but_not_its_emergency_stop() {
 
     // A wrong password: the session either fails to open or never reaches
     // the node.
-    if let Ok(intruder) = Supervisor::connect(
+    if let Ok(intruder) = SupervisorStation::connect(
         session(&endpoint, "supervisor", "wrong-password"),
         ROBOT,
         options.format,
@@ -66,7 +66,7 @@ fn access_control_drops_an_observers_command_but_not_its_emergency_stop() {
     }
 
     let connect = |user: &str, password: &str| {
-        let supervisor = Supervisor::connect(
+        let supervisor = SupervisorStation::connect(
             session(&endpoint, user, password),
             ROBOT,
             options.format,

@@ -8,10 +8,11 @@ pub mod lift;
 
 use lift::Lift;
 use limb_zenoh::auth::CommandKey;
-use limb_zenoh::link::{LinkSettings, LivenessPolicy, OnSupervisorLoss, SampleQos};
+use limb_zenoh::link::{LinkSettings, SampleQos};
 use limb_zenoh::node::Node;
 use limb_zenoh::session::{free_loopback_port, peer_config};
-use limb_zenoh::supervisor::Supervisor;
+use limb_zenoh::supervision::{LivenessPolicy, OnSupervisorLoss};
+use limb_zenoh::supervisor::SupervisorStation;
 use limb_zenoh::wire::WireFormat;
 use std::time::{Duration, Instant};
 
@@ -21,7 +22,7 @@ pub const TIMEOUT: Duration = Duration::from_secs(5);
 
 pub struct Rig {
     pub node: Node,
-    pub supervisor: Supervisor,
+    pub supervisor: SupervisorStation,
     pub endpoint: String,
     pub format: WireFormat,
 }
@@ -97,9 +98,9 @@ pub fn rig(options: RigOptions) -> Rig {
 }
 
 /// Another supervisor session on the same node.
-pub fn connect(endpoint: &str, format: WireFormat, key: CommandKey) -> Supervisor {
+pub fn connect(endpoint: &str, format: WireFormat, key: CommandKey) -> SupervisorStation {
     let config = peer_config(&[], &[endpoint.to_owned()], 1000).unwrap();
-    let supervisor = Supervisor::connect(config, ROBOT, format, key).unwrap();
+    let supervisor = SupervisorStation::connect(config, ROBOT, format, key).unwrap();
     supervisor.wait_for_node(TIMEOUT).unwrap();
     supervisor
 }
