@@ -33,7 +33,7 @@
 
 use crate::holdout::{HoldOut, TooShort};
 use crate::locate::{locate, Location};
-use crate::model::{Applied, Hints, Model, ModelError, Series};
+use crate::model::{Applied, Candidate, Hints, Model, ModelError, Series};
 use crate::optimize::{minimize, Budget};
 use crate::residual::{gap, scaled, signal_sums, sum_of_squares};
 use serde::Serialize;
@@ -536,6 +536,159 @@ fn check_alike(problem: &Problem) -> Result<(), EngineError> {
     Ok(())
 }
 
+/// The nominal sim: with its own parameters fitted (settled), where its
+/// model has any; and the evaluations that fit spent.
+fn nominal_base(problem: &Problem, options: &Options) -> (Vec<Applied>, usize) {
+    match problem.fit.model.base() {
+        Some(base) => {
+            let fitted = fit(problem, &[], base, &Hints::default(), options);
+            (settle(problem, fitted.effects), fitted.evaluations)
+        }
+        None => (Vec::new(), 0),
+    }
+}
+
+/// An addition still on `trial` that the next step did not confirm: the
+/// steps end at the one that added it (which now adds nothing), and the
+/// selection goes back to what it was before it, settled there again,
+/// with its held-out sums per signal.
+fn withdraw(
+    problem: &Problem,
+    trial: Trial,
+    steps: &mut Vec<Step>,
+) -> (Vec<Applied>, Vec<(f64, usize)>) {
+    steps.truncate(trial.step + 1);
+    if let Some(step) = steps.last_mut() {
+        step.added = None;
+    }
+    let chosen = settle(problem, trial.chosen);
+    let current = held_sums(problem, &chosen).unwrap_or(trial.current);
+    (chosen, current)
+}
+
+/// `candidate`'s parameters by name with `values` (in its order and units).
+fn values_of(candidate: &Candidate, values: &[f64]) -> BTreeMap<String, f64> {
+    candidate
+        .parameters
+        .iter()
+        .zip(values)
+        .map(|(p, v)| (p.name.to_string(), *v))
+        .collect()
+}
+
+/// One step's ranking: each fit's candidate (the last effect it added)
+/// with its share of the gap `before` closed (`share` of the held-out gap
+/// after, `gap_of` of a held-out sum), its information criterion against
+/// the `current` held-out sums (noise `floor`), its fitted values and
+/// units; best criterion first (stable sort: ties keep candidate order).
+fn rank<'f>(
+    fits: &'f [Fitted],
+    candidates: &[Candidate],
+    current: &[(f64, usize)],
+    floor: f64,
+    gap_of: &dyn Fn(f64) -> f64,
+    share: &dyn Fn(f64) -> f64,
+) -> Vec<(Ranked, &'f Fitted)> {
+    let mut ranked: Vec<(Ranked, &Fitted)> = fits
+        .iter()
+        .map(|f| {
+            let mine = f.effects.last().cloned().unwrap_or(Applied {
+                candidate: 0,
+                values: Vec::new(),
+            });
+            let candidate = &candidates[mine.candidate];
+            let parameters = &candidate.parameters;
+            let after = gap_of(total(&f.held));
+            (
+                Ranked {
+                    effect: candidate.name.to_string(),
+                    score: share(after),
+                    criterion: criterion(current, &f.held, parameters.len(), floor),
+                    params: values_of(candidate, &mine.values),
+                    units: parameters
+                        .iter()
+                        .map(|p| (p.name.to_string(), p.unit.to_string()))
+                        .collect(),
+                    held_out_after: after,
+                },
+                f,
+            )
+        })
+        .collect();
+    ranked.sort_by(|a, b| b.0.criterion.total_cmp(&a.0.criterion));
+    ranked
+}
+
+/// Takes the step's winning fit into the selection: its effects settled
+/// (the base's parameters kept in range) and, when settling moved them,
+/// refitted and settled again until the first `base_count` parameters stop
+/// moving (at most [`REFITS`] rounds: a base far from the reference of the
+/// step's fits, an arm fitted to the arm after a slip, needs more than
+/// one). Returns the new selection, its held-out sums per signal and the
+/// evaluations the refits spent.
+fn accept(
+    problem: &Problem,
+    fitted: Fitted,
+    base_count: usize,
+    options: &Options,
+) -> (Vec<Applied>, Vec<(f64, usize)>, usize) {
+    let held = problem.held.model;
+    let settled = settle(problem, fitted.effects.clone());
+    if settled == fitted.effects {
+        return (settled, fitted.held, 0);
+    }
+    let mut spent_all = 0;
+    let mut set = settled;
+    for _ in 0..REFITS {
+        let (refitted, spent) = refit(problem, set.clone(), options);
+        spent_all += spent;
+        let moved = units_of(held, &refitted)
+            .iter()
+            .zip(units_of(held, &set))
+            .take(base_count)
+            .any(|(a, b)| (a - b).abs() > BASE_STILL);
+        set = refitted;
+        if !moved {
+            break;
+        }
+    }
+    let current = held_sums(problem, &set).unwrap_or(fitted.held);
+    (set, current, spent_all)
+}
+
+/// The selection's `added` effects (after the nominal base), each as the
+/// step that added it ranked it (`steps[i]` for the i-th), with its final
+/// values; `after` is the held-out gap of an effect no step ranked.
+fn added_effects(
+    added: &[Applied],
+    steps: &[Step],
+    candidates: &[Candidate],
+    after: f64,
+) -> Vec<Ranked> {
+    added
+        .iter()
+        .enumerate()
+        .map(|(i, a)| {
+            let candidate = &candidates[a.candidate];
+            let mut ranked = steps[i]
+                .ranking
+                .iter()
+                .find(|r| r.effect == candidate.name)
+                .cloned()
+                .unwrap_or_else(|| Ranked {
+                    effect: candidate.name.to_string(),
+                    score: 0.0,
+                    criterion: 0.0,
+                    params: BTreeMap::new(),
+                    units: BTreeMap::new(),
+                    held_out_after: after,
+                });
+            ranked.params = values_of(candidate, &a.values);
+            ranked
+        })
+        .collect()
+}
+
 /// Diagnoses `problem`: ranks every candidate and adds effects by forward
 /// selection (see the module docs). `progress` is told of every finished
 /// fit.
@@ -551,14 +704,8 @@ pub fn select(
     let held = problem.held.model;
     let floor = held.noise_floor();
     let candidates = problem.fit.model.candidates();
-    let mut evaluations = 1usize;
-    // The nominal sim: with its own parameters fitted, where it has any.
-    let mut chosen: Vec<Applied> = Vec::new();
-    if let Some(base) = problem.fit.model.base() {
-        let fitted = fit(problem, &[], base, &Hints::default(), options);
-        evaluations += fitted.evaluations;
-        chosen = settle(problem, fitted.effects);
-    }
+    let (mut chosen, spent) = nominal_base(problem, options);
+    let mut evaluations = 1 + spent;
     let nominal_effects = chosen.clone();
     let base_count: usize = nominal_effects
         .iter()
@@ -612,36 +759,7 @@ pub fn select(
             fitted
         });
         evaluations += fits.iter().map(|f| f.evaluations).sum::<usize>();
-        let mut ranked: Vec<(Ranked, &Fitted)> = fits
-            .iter()
-            .map(|f| {
-                let mine = f.effects.last().cloned().unwrap_or(Applied {
-                    candidate: 0,
-                    values: Vec::new(),
-                });
-                let parameters = &candidates[mine.candidate].parameters;
-                let after = gap_of(total(&f.held));
-                (
-                    Ranked {
-                        effect: candidates[mine.candidate].name.to_string(),
-                        score: share(after),
-                        criterion: criterion(&current, &f.held, parameters.len(), floor),
-                        params: parameters
-                            .iter()
-                            .zip(&mine.values)
-                            .map(|(p, v)| (p.name.to_string(), *v))
-                            .collect(),
-                        units: parameters
-                            .iter()
-                            .map(|p| (p.name.to_string(), p.unit.to_string()))
-                            .collect(),
-                        held_out_after: after,
-                    },
-                    f,
-                )
-            })
-            .collect();
-        ranked.sort_by(|a, b| b.0.criterion.total_cmp(&a.0.criterion));
+        let ranked = rank(&fits, candidates, &current, floor, &gap_of, &share);
         let gap_now = gap_of(total(&current));
         // The share counts from the gap before an addition on trial.
         let share_of = trial.as_ref().map_or(gap_now, |t| t.gap);
@@ -670,41 +788,12 @@ pub fn select(
             added: winner.as_ref().map(|w| w.0.clone()),
         });
         let Some((_, fitted)) = winner else { break };
-        let settled = settle(problem, fitted.effects.clone());
-        if settled == fitted.effects {
-            chosen = settled;
-            current = fitted.held;
-        } else {
-            // Refit and settle until the base stops moving: a base far from
-            // the reference of the step's fits (an arm fitted to the
-            // arm after a slip) needs more than one round.
-            let mut set = settled;
-            for _ in 0..REFITS {
-                let (refitted, spent) = refit(problem, set.clone(), options);
-                evaluations += spent;
-                let moved = units_of(held, &refitted)
-                    .iter()
-                    .zip(units_of(held, &set))
-                    .take(base_count)
-                    .any(|(a, b)| (a - b).abs() > BASE_STILL);
-                set = refitted;
-                if !moved {
-                    break;
-                }
-            }
-            current = held_sums(problem, &set).unwrap_or(fitted.held);
-            chosen = set;
-        }
+        let spent;
+        (chosen, current, spent) = accept(problem, fitted, base_count, options);
+        evaluations += spent;
     }
-    // An addition still on trial was not confirmed by the next one: the
-    // set goes back to what it was before it (settled there again).
     if let Some(t) = trial {
-        steps.truncate(t.step + 1);
-        if let Some(step) = steps.last_mut() {
-            step.added = None;
-        }
-        chosen = settle(problem, t.chosen);
-        current = held_sums(problem, &chosen).unwrap_or(t.current);
+        (chosen, current) = withdraw(problem, t, &mut steps);
     }
     let chosen_prediction = if chosen == nominal_effects {
         nominal.clone()
@@ -714,45 +803,12 @@ pub fn select(
     let (remaining, _) = locate(held, &scaled(held, &chosen_prediction));
     let after = gap_of(total(&current));
     let base = nominal_effects.len();
-    let effects = chosen
-        .iter()
-        .skip(base)
-        .enumerate()
-        .map(|(i, a)| {
-            let parameters = &candidates[a.candidate].parameters;
-            let mut ranked = steps[i]
-                .ranking
-                .iter()
-                .find(|r| r.effect == candidates[a.candidate].name)
-                .cloned()
-                .unwrap_or_else(|| Ranked {
-                    effect: candidates[a.candidate].name.to_string(),
-                    score: 0.0,
-                    criterion: 0.0,
-                    params: BTreeMap::new(),
-                    units: BTreeMap::new(),
-                    held_out_after: after,
-                });
-            ranked.params = parameters
-                .iter()
-                .zip(&a.values)
-                .map(|(p, v)| (p.name.to_string(), *v))
-                .collect();
-            ranked
-        })
-        .collect();
+    let effects = added_effects(&chosen[base.min(chosen.len())..], &steps, candidates, after);
     let parameters_of = |effects: &[Applied]| {
         effects
             .first()
             .filter(|_| base > 0)
-            .map(|a| {
-                candidates[a.candidate]
-                    .parameters
-                    .iter()
-                    .zip(&a.values)
-                    .map(|(p, v)| (p.name.to_string(), *v))
-                    .collect()
-            })
+            .map(|a| values_of(&candidates[a.candidate], &a.values))
             .unwrap_or_default()
     };
     Ok(Selection {
