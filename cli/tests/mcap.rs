@@ -5,7 +5,6 @@
 
 mod common;
 
-use serde_json::Value;
 use std::path::PathBuf;
 use std::process::Command;
 
@@ -46,12 +45,7 @@ fn an_mcap_session_log_holds_the_csv_logs_rows_and_reads_to_the_same_answers() {
             .args([script, mcap_s])
             .output()
             .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let read: Value = serde_json::from_slice(&out.stdout).unwrap();
+        let read = common::json_of(&out);
         assert_eq!(read["counts"]["/limb/frame"], frames as u64);
         assert_eq!(read["counts"]["/limb/step"], steps as u64);
         assert_eq!(

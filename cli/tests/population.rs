@@ -5,7 +5,8 @@
 //! 1 mm of the truth in l1 and l2. `limb population` prints the figures
 //! the README quotes.
 
-use serde_json::Value;
+mod common;
+
 use std::process::Command;
 
 /// REQ-MON-011, REQ-EST-004: 500 random arms stay inside the joint limits
@@ -16,12 +17,7 @@ fn five_hundred_random_arms_stay_inside_the_limits_and_within_1_mm() {
         .args(["population", "--arms", "500", "--seed", "2026", "--json"])
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let report: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let report = common::json_of(&out);
     assert_eq!(report["arms"], 500);
     assert_eq!(report["within_limits"], 500, "{}", report["refused"]);
     assert_eq!(report["over_1mm"], 0);

@@ -1,6 +1,7 @@
 //! `limb zenoh` processes on loopback.
 
-use serde_json::Value;
+mod common;
+
 use std::process::{Command, Stdio};
 
 /// Finding 6 of issue 18: the CLI installs a `tracing` subscriber, so a
@@ -50,12 +51,7 @@ fn a_node_logs_the_commands_it_refuses() {
             .arg("stop")
             .output()
             .unwrap();
-        assert!(
-            send.status.success(),
-            "{}",
-            String::from_utf8_lossy(&send.stderr)
-        );
-        let ack: Value = serde_json::from_slice(&send.stdout).unwrap();
+        let ack = common::json_of(&send);
         assert_eq!(ack["outcome"]["reason"], "unauthorised", "{ack}");
         let node = node.wait_with_output().unwrap();
         let log = String::from_utf8_lossy(&node.stderr);
@@ -159,12 +155,7 @@ fn a_zenoh_configuration_file_sets_access_control() {
         "the panel's command was acknowledged"
     );
     let supervisor = send("supervisor", &["send", "stop"]);
-    assert!(
-        supervisor.status.success(),
-        "{}",
-        String::from_utf8_lossy(&supervisor.stderr)
-    );
-    let ack: Value = serde_json::from_slice(&supervisor.stdout).unwrap();
+    let ack = common::json_of(&supervisor);
     assert_eq!(ack["outcome"]["outcome"], "accepted", "{ack}");
     let estop = send("panel", &["estop"]);
     assert!(
