@@ -131,7 +131,7 @@ def use_paths(text):
     return out
 
 
-def resolve(segs, here, mods, is_dir_module):
+def resolve(segs, here, mods):
     """The module a path from module `here` lands in, or None if external."""
     if not segs:
         return None
@@ -175,7 +175,7 @@ def crate_graph(src_dir):
         code = re.sub(r"\buse\s+[^;]+;", "", uses_text, flags=re.S)
         paths += [p.split("::") for p in re.findall(r"\b(?:crate|super|self)(?:::\w+)+", code)]
         for segs in paths:
-            t = resolve(segs, mod, mods, False)
+            t = resolve(segs, mod, mods)
             if t is not None and t != mod and t in mods:
                 edges[mod].add(t)
     for m in list(edges):
