@@ -4,8 +4,8 @@
 //!            StartEstimation        refinement done,        ApproveManipulation
 //!   Grasp ──────────────────▶ Estimate ─────────────▶ Validated ──────────────▶ Manipulate
 //!     ▲          (lifting → settling │      validator ok     ▲  │                      │
-//!     │           → concluding, see  │                       │  │                      │
-//!     │           crate::lift)       │                       │  │                      │
+//!     │           in crate::lift,    │                       │  │                      │
+//!     │           then concluding)   │                       │  │                      │
 //!     │ Reset                    │                       │  └──────────────────────┘
 //!     │                          ▼                       │     FinishManipulation
 //!  SafeStop ◀──── any violation, Stop, rejected estimate, failure (from every state)
