@@ -155,6 +155,7 @@ pub(crate) fn validated_arm() -> ValidatedArm {
             forearm_samples: 1000,
             upper_arm_samples: 1000,
             outliers: 0,
+            resolution: 0.0,
         },
     };
     let accepted = validate(

@@ -183,6 +183,7 @@ proptest! {
                 forearm_samples: 100,
                 upper_arm_samples: 100,
                 outliers: 0,
+                resolution: 0.0,
             },
         };
         let limits = ValidationLimits::default();
@@ -449,15 +450,14 @@ fn points_at_exactly_the_least_spread_are_fitted() {
     }
 }
 
-/// The refinement is Gauss-Newton: from a forearm circle 5 mm off (centre
-/// and radius) on a noise-free two-phase lift, its `ITERATIONS` passes per
-/// phase converge quadratically to the true arm to within 1e-9 m, which a
-/// step with a wrong normal matrix (converging linearly, if at all) does
-/// not reach. The lift: an arm (l1 0.3 m, l2 0.2 m) flat on the table
-/// lifts its forearm 1.2 rad about the elbow, then its upper arm 0.8 rad
-/// about the shoulder, sampled at 100 Hz.
+/// The refinement recovers a noise-free two-phase lift's arm to within
+/// 1e-9 m (lengths, shoulder, elbow) and its arcs. The lift: an arm (l1
+/// 0.3 m, l2 0.2 m, the shoulder off both axes) flat on the table lifts its
+/// forearm 1.2 rad about the elbow, then its upper arm 0.8 rad about the
+/// shoulder, sampled at 100 Hz. (The Gauss-Newton step's quadratic
+/// convergence from a start off the circle: `refine.rs`'s unit test.)
 #[test]
-fn the_refinement_converges_quadratically_from_a_start_off_the_arm() {
+fn the_refinement_recovers_a_noise_free_arm() {
     use limb_kernel::arm::{ArmGeometry, JointAngles};
     use limb_kernel::estimation::refine::{Progress, Refinement};
     use limb_kernel::path::PATH_CAPACITY;
@@ -483,11 +483,7 @@ fn the_refinement_converges_quadratically_from_a_start_off_the_arm() {
         .collect();
     let lift = path.iter().position(|s| s.pose.psi > 0.05).unwrap();
     let elbow = Point::new(l2 + 0.03, 0.1);
-    let start = Circle {
-        centre: Point::new(elbow.x + 0.005, elbow.z - 0.005),
-        radius: l2 + 0.005,
-    };
-    let mut refinement = Refinement::new(start, lift..rest + forearm, path.len(), [0.0, 0.0]);
+    let mut refinement = Refinement::new(lift..rest + forearm, path.len(), [0.0, 0.0]);
     let estimate = (0..100)
         .find_map(|_| match refinement.advance(&path, PATH_CAPACITY) {
             Progress::Done(outcome) => Some(outcome.expect("refined")),
@@ -531,12 +527,8 @@ fn a_refinement_over_too_short_a_phase_is_refused_by_name() {
             wrench: Wrench::ZERO,
         })
         .collect();
-    let circle = Circle {
-        centre: Point::new(0.2, 0.0),
-        radius: 0.2,
-    };
     let run = |forearm: core::ops::Range<usize>, len: usize| {
-        let mut refinement = Refinement::new(circle, forearm, len, [0.0, 0.0]);
+        let mut refinement = Refinement::new(forearm, len, [0.0, 0.0]);
         (0..100)
             .find_map(|_| match refinement.advance(&path[..len], PATH_CAPACITY) {
                 Progress::Done(outcome) => Some(outcome.map(|_| ())),

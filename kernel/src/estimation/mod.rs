@@ -22,6 +22,7 @@
 //! largest stack object is the 1 002-byte Hough accumulator.
 
 mod circle;
+pub mod dequantize;
 mod geometric;
 mod grasp;
 mod hough;
@@ -94,6 +95,13 @@ pub struct FitEvidence {
     /// ([`outlier`]); 0 for the methods that use every sample (the paper's
     /// `Ls` and `Hough`).
     pub outliers: usize,
+    /// The sensor's resolution as the fits met it [m]: a quantizer's step
+    /// of the grasp point, or of the elbow point under a step of psi (l2 ×
+    /// the angle step), whichever is larger ([`dequantize`]). 0 on an
+    /// unquantized path, and for the methods other than
+    /// [`Method::Online`], which do not measure it. The validator allows
+    /// its precision checks half of it (`crate::validate`).
+    pub resolution: f64,
 }
 
 /// An unvalidated arm estimate (frame S). Turned into a
@@ -372,6 +380,7 @@ pub fn estimate_arm(path: &[PathSample], method: Method) -> Result<ArmEstimate, 
             upper_arm_samples,
             outliers: phases.forearm.len().saturating_sub(forearm_samples)
                 + phases.upper_arm.len().saturating_sub(upper_arm_samples),
+            resolution: 0.0,
         },
     })
 }
@@ -494,8 +503,8 @@ pub fn estimate_online(
     }
     let mut refinement = refine::Refinement::after(&online, path.len(), prior.shoulder_rhythm)
         .ok_or(EstimateError::UpperArmPhaseTooShort)?;
-    // Each call ends at least one pass: 3 ITERATIONS + 3 passes in all.
-    for _ in 0..3 * refine::ITERATIONS + 4 {
+    // Each call ends at least one pass; the last call reports the outcome.
+    for _ in 0..=refine::MAX_PASSES {
         if let refine::Progress::Done(outcome) = refinement.advance(path, PATH_CAPACITY) {
             return outcome;
         }
