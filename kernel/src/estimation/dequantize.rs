@@ -18,8 +18,9 @@
 //! ((t₍start−1₎ + t₍start₎)/2, (v₍start−1₎ + v)/2), and the one after it.
 //!
 //! Left as read: a reading that changes every sample (an unquantized,
-//! noisy sensor: the kernel's usual input). On such a path the
-//! refinement's input is unchanged, bit for bit.
+//! noisy sensor: the kernel's usual input; on such a path the
+//! refinement's input is unchanged, bit for bit), and a non-finite
+//! reading (∞ = ∞, but a run of infinities is no quantizer's).
 //!
 //! **Not known within its cell**, and left out of the fits
 //! ([`Dequantizer::pose`] gives `None`), is a sample of a run that cannot
