@@ -419,7 +419,11 @@ impl Refinement {
                 // Only ever shortened, and never below the least phase.
                 let (start, end) = self.forearm_range;
                 if let Some(last) = self.last_on_circle {
-                    let trimmed = (last + 1).clamp(start + super::MIN_PHASE_SAMPLES, end);
+                    // Not `clamp`: its bounds' order is checked by a panic.
+                    let trimmed = last
+                        .saturating_add(1)
+                        .max(start.saturating_add(super::MIN_PHASE_SAMPLES))
+                        .min(end);
                     self.forearm_range.1 = trimmed;
                     self.upper_arm_range.0 = trimmed;
                 }
