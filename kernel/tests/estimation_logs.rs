@@ -218,8 +218,9 @@ fn online_estimate_is_accurate_on_the_six_noisy_logs() {
 /// 4.4 mm, psi to 0.66°) the online estimate is validated with l1 and l2
 /// within the measured 0.27 / 1.37 mm plus [`MARGIN`], and reports the
 /// quantizer's step as its resolution (4.44 mm); read as recorded (the
-/// dequantizer off) l2 came out 1.96 mm off and the log was refused. The six noisy logs, whose files
-/// repeat a value now and then (written to 1 µm), report none.
+/// reader off by hand) l1 came out 0.54 and l2 1.96 mm off. The six noisy
+/// logs, whose files repeat a value now and then (written to 1 µm),
+/// report none.
 #[test]
 fn req_est_007_a_quantized_log_is_estimated_and_validated() {
     let labelled = logs::labelled_effects()

@@ -100,7 +100,8 @@ pub struct FitEvidence {
     /// the angle step), whichever is larger ([`dequantize`]). 0 on an
     /// unquantized path, and for the methods other than
     /// [`Method::Online`], which do not measure it. The validator allows
-    /// its precision checks half of it (`crate::validate`).
+    /// the residual bias and the methods' disagreement half of it
+    /// (`crate::validate`).
     pub resolution: f64,
 }
 

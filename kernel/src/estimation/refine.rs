@@ -18,12 +18,14 @@
 //!    the online split's departure tolerance of the refined circle (the
 //!    online split, judged on the raw readings, may come late: a
 //!    quantizer's staircase widens its tolerance to 4 mm); the samples
-//!    after it join the upper-arm phase;
+//!    after it join the upper-arm phase. The tolerance is 4 × the fit's
+//!    unweighted RMS residual, which late samples inflate: 20 samples late
+//!    on a noise-free lift 7 are kept, 60 late 33;
 //! 2. one evidence pass of the forearm phase (with its Kåsa moments, the
-//!    algebraic answer the geometric one is compared with): RMS geometric residual, the
-//!    arc between its first and last point, and the grasp pitch offset δ
-//!    (`crate::arm`), the mean over its samples of the pitch minus the
-//!    forearm's elevation from the refined resting elbow;
+//!    algebraic answer the geometric one is compared with): RMS geometric
+//!    residual, the arc between its first and last point, and the grasp
+//!    pitch offset δ (`crate::arm`), the mean over its samples of the
+//!    pitch minus the forearm's elevation from the refined resting elbow;
 //! 3. one pass of Kåsa moments of the upper-arm phase's elbow points under
 //!    the refined l2 and δ (the algebraic answer, and the start of step 4);
 //! 4. [`ITERATIONS`] Gauss-Newton passes on those elbow points: the
