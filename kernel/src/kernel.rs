@@ -723,7 +723,7 @@ impl Kernel {
 /// Unwind bounds: a kernel is built by [`Kernel::new`], whose configuration
 /// check runs over at most 11 values per group (the validation limits'
 /// positive values, `all_positive`: 12), and the fixed validated arm by the
-/// validator, which checks 21 values for finiteness (22); one step pushes
+/// validator, which checks 22 values for finiteness (24); one step pushes
 /// one frame into an empty rate window (its trimming loop runs at most
 /// once) and loops over 3 axes in the impedance law. The Estimate harness
 /// starts from a fresh lift, where a step records at most one sample; the
@@ -915,7 +915,7 @@ mod verification {
         /// never panics, commands within the limits and stops on any fault in
         /// the same step.
         #[cfg_attr(kani, kani::proof)]
-        #[cfg_attr(kani, kani::unwind(22))]
+        #[cfg_attr(kani, kani::unwind(24))]
         pub(super) fn verify_req_panic_001_step_in_validated() {
             let (kernel, at) = kernel_in(StateKind::Validated);
             let command = one_step(kernel, at, 0.0);
@@ -936,7 +936,7 @@ mod verification {
         /// non-finite one) never panics, commands within the limits and stops
         /// on any fault in the same step.
         #[cfg_attr(kani, kani::proof)]
-        #[cfg_attr(kani, kani::unwind(22))]
+        #[cfg_attr(kani, kani::unwind(24))]
         pub(super) fn verify_req_panic_001_step_while_manipulating() {
             let (kernel, at) = kernel_in(StateKind::Manipulate);
             let command = one_step(kernel, at, 0.001);
@@ -959,7 +959,7 @@ mod verification {
         /// set-point at rest, the held pose (the wrench is the impedance law's
         /// about it, within the limits).
         #[cfg_attr(kani, kani::proof)]
-        #[cfg_attr(kani, kani::unwind(22))]
+        #[cfg_attr(kani, kani::unwind(24))]
         pub(super) fn verify_req_sm_006_safe_stop_is_latched() {
             let (mut kernel, _) = kernel_in(StateKind::SafeStop);
             let limits = kernel.config().limits;
@@ -1017,7 +1017,7 @@ mod verification {
         /// model (Manipulate only from Validated by an approved target), and a
         /// refusal names the request and the state and changes nothing.
         #[cfg_attr(kani, kani::proof)]
-        #[cfg_attr(kani, kani::unwind(22))]
+        #[cfg_attr(kani, kani::unwind(24))]
         pub(super) fn verify_req_sm_005_no_manipulation_without_a_validated_model() {
             from_any_state(|kind| {
                 let (mut kernel, _) = kernel_in(kind);
@@ -1062,7 +1062,7 @@ mod verification {
         /// REQ-SM-004: a request at a non-finite or backwards clock is refused
         /// for an invalid time, except a stop and the reset of a stop.
         #[cfg_attr(kani, kani::proof)]
-        #[cfg_attr(kani, kani::unwind(22))]
+        #[cfg_attr(kani, kani::unwind(24))]
         pub(super) fn verify_req_sm_004_requests_need_a_sane_clock() {
             from_any_state(|kind| {
                 let (mut kernel, _) = kernel_in(kind);
@@ -1103,7 +1103,7 @@ mod verification {
         /// SafeStop and only when the whole configuration passes its check;
         /// otherwise the configuration is unchanged.
         #[cfg_attr(kani, kani::proof)]
-        #[cfg_attr(kani, kani::unwind(22))]
+        #[cfg_attr(kani, kani::unwind(24))]
         pub(super) fn verify_req_sm_007_limits_change_only_while_held() {
             from_any_state(|kind| {
                 let (mut kernel, _) = kernel_in(kind);

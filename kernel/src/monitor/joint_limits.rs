@@ -111,10 +111,11 @@ mod verification {
         /// what it tripped on. That it trips exactly outside the joint ranges is
         /// numerical (inverse kinematics through atan2): the proptest property
         /// `arbitrary_sessions_keep_every_safety_property` checks it against an
-        /// independent model. Unwind 22: the validator that makes the fixed
-        /// arm checks 21 values for finiteness.
+        /// independent model. Unwind 24: the validator that makes the fixed
+        /// arm checks 22 values for finiteness (22 iterations and the
+        /// loop's exit; 24 as the validator's own proof).
         #[cfg_attr(kani, kani::proof)]
-        #[cfg_attr(kani, kani::unwind(22))]
+        #[cfg_attr(kani, kani::unwind(24))]
         pub(super) fn verify_req_mon_005_joint_limit_monitor_is_total() {
             let l = SafetyLimits::default();
             let monitor = JointLimitMonitor::from_limits(&l);
