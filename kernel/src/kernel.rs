@@ -89,6 +89,23 @@ pub struct Kernel {
 /// averages 50 frames (2.5 mm of force noise → 0.25 mm).
 pub(crate) const HOLDING_TIME_CONSTANT: f64 = 0.05;
 
+/// REQ-SM-004's decision, taken before any other: a request at kernel
+/// time `now` [s], the kernel's last clock `last`, is refused for an
+/// invalid time when `now` is not finite or is before `last`, unless it is
+/// a stop or the reset of a stop (`kind` SafeStop), which are honoured at
+/// any clock. `None`: the clock does not refuse it.
+fn clock_refusal(
+    request: Request,
+    kind: StateKind,
+    now: f64,
+    last: Option<f64>,
+) -> Option<RefusalReason> {
+    let exempt =
+        request == Request::Stop || (request == Request::Reset && kind == StateKind::SafeStop);
+    let sane = now.is_finite() && last.is_none_or(|t| now >= t);
+    (!sane && !exempt).then_some(RefusalReason::InvalidTime)
+}
+
 impl Kernel {
     /// A kernel in Grasp with configuration `config`.
     ///
@@ -437,16 +454,19 @@ impl Kernel {
             state: from,
             reason,
         };
-        let time_ok = now.is_finite() && self.last_now.is_none_or(|t| now >= t);
-        // Taken before the state is moved out: how a stop moves depends on it.
-        let start = self.stop_start(now, self.last_frame.map(|f| f.pose));
-        let state = core::mem::replace(&mut self.state, State::Grasp(Grasp::new()));
+        let time = if now.is_finite() { now } else { f64::NAN };
+        if let Some(reason) = clock_refusal(request, from, now, self.last_now) {
+            return Err(self.refused(refuse(reason), time));
+        }
+        // A copy: `self.state` stays the state the request found (a stop's
+        // start reads it) until the answer replaces it below.
+        let state = self.state;
         let result = match (request, state) {
             (Request::Stop, State::SafeStop(stop)) => Ok(State::SafeStop(stop)),
             (Request::Stop, other) => Ok(State::SafeStop(stop_state(
                 other,
                 StopReason::Operator,
-                start,
+                self.stop_start(now, self.last_frame.map(|f| f.pose)),
             ))),
             (Request::Reset, State::SafeStop(stop)) if !self.still_for_reset(&stop, now) => {
                 Err((State::SafeStop(stop), refuse(RefusalReason::ArmNotStill)))
@@ -458,7 +478,6 @@ impl Kernel {
                 self.holding_offset = None;
                 Ok(State::Grasp(stop.reset()))
             }
-            (_, other) if !time_ok => Err((other, refuse(RefusalReason::InvalidTime))),
             (Request::StartEstimation, State::Grasp(grasp)) => match self.fresh_pose(now) {
                 None => Err((
                     State::Grasp(grasp),
@@ -502,7 +521,6 @@ impl Kernel {
             }
             (_, other) => Err((other, refuse(RefusalReason::NotAllowedInState))),
         };
-        let time = if now.is_finite() { now } else { f64::NAN };
         match result {
             Ok(state) => {
                 self.state = state;
@@ -514,13 +532,19 @@ impl Kernel {
             }
             Err((state, refusal)) => {
                 self.state = state;
-                self.trace.record(TraceEvent {
-                    time,
-                    event: Event::Refused(refusal),
-                });
-                Err(refusal)
+                Err(self.refused(refusal, time))
             }
         }
+    }
+
+    /// Traces `refusal` at kernel time `time` [s] (NaN for a clock that was
+    /// not finite) and returns it.
+    fn refused(&mut self, refusal: Refusal, time: f64) -> Refusal {
+        self.trace.record(TraceEvent {
+            time,
+            event: Event::Refused(refusal),
+        });
+        refusal
     }
 
     /// Replaces the safety limits (REQ-SM-007). Allowed only while the arm
@@ -647,7 +671,7 @@ impl Kernel {
     fn stop(&mut self, reason: StopReason, now: f64, at: Option<Pose>) -> Command {
         let from = self.state.kind();
         let start = self.stop_start(now, at);
-        let state = core::mem::replace(&mut self.state, State::Grasp(Grasp::new()));
+        let state = self.state;
         let stop = stop_state(state, reason, start);
         self.state = State::SafeStop(stop);
         self.stop_clock = start.now;
@@ -832,8 +856,9 @@ mod verification {
     /// t = 0) or SafeStop (an operator's stop in Validated before any
     /// frame: latched at [`HOLD`]), with where the arm is. One default
     /// kernel is built, and the fixed arm validated at one call site, so
-    /// that a harness over any state pays for each once; Manipulate and
-    /// SafeStop are reached by their requests from Validated.
+    /// that a harness over any state pays for each once; Manipulate is
+    /// entered by the approval's plan and start, SafeStop by its request
+    /// from Validated.
     fn kernel_in(kind: StateKind) -> (Kernel, Pose) {
         let mut kernel = Kernel::in_state(State::Grasp(Grasp::new()));
         let at = match kind {
@@ -850,11 +875,23 @@ mod verification {
             }
             StateKind::Validated | StateKind::Manipulate | StateKind::SafeStop => {
                 // One call site of the validator for the three kinds.
-                kernel.state = State::Validated(Validated::holding(validated_arm(), HOLD));
+                let validated = Validated::holding(validated_arm(), HOLD);
+                kernel.state = State::Validated(validated);
                 if kind == StateKind::Manipulate {
-                    let approved =
-                        kernel.request(Request::ApproveManipulation(MANIPULATION_TARGET), 0.0);
-                    kani::assume(approved == Ok(StateKind::Manipulate));
+                    // The approval's own steps (the plan REQ-SM-003's proof
+                    // checks, then its start), without the request's
+                    // wrapper, whose every branch the solver would unroll
+                    // (not decided in 10 min).
+                    let plan = validated.plan_manipulation(
+                        MANIPULATION_TARGET,
+                        kernel.config.manipulation_peak_speed,
+                        &kernel.monitors.joint_limits,
+                        &kernel.monitors.workspace,
+                    );
+                    kani::assume(plan.is_ok());
+                    kernel.state = State::Manipulate(
+                        validated.begin_manipulation(plan.expect("assumed"), 0.0),
+                    );
                 } else if kind == StateKind::SafeStop {
                     // An operator's stop before any frame: the request
                     // itself, so the latch is the one a session gets.
@@ -1058,6 +1095,37 @@ mod verification {
         }
     }
 
+    /// REQ-SM-004, the decision [`Kernel::request`] takes first: for any
+    /// request, state kind and clock, and any finite last clock or none,
+    /// the clock refuses (for an invalid time) exactly the requests that
+    /// are neither a stop nor a stop's reset, at a clock that is not a
+    /// number, infinite or before the last one. That the kernel's requests
+    /// go through it is the whole-kernel harness below (undecided) and
+    /// the transition tests.
+    #[cfg_attr(kani, kani::proof)]
+    pub(super) fn verify_req_sm_004_the_clock_refuses_first() {
+        let request = any_request();
+        let kind = StateKind::ALL[usize::from(kani::any::<u8>() % 5)];
+        let now: f64 = kani::any();
+        let last = if kani::any() {
+            None
+        } else {
+            Some(kani::any::<f64>())
+        };
+        kani::assume(last.is_none_or(f64::is_finite));
+        let refusal = clock_refusal(request, kind, now, last);
+        let bad = now.is_nan() || now.is_infinite() || matches!(last, Some(t) if now < t);
+        let exempt = matches!(request, Request::Stop)
+            || (matches!(request, Request::Reset) && kind == StateKind::SafeStop);
+        assert_eq!(
+            refusal,
+            (bad && !exempt).then_some(RefusalReason::InvalidTime)
+        );
+        kani::cover!(refusal.is_some(), "clock: refused");
+        kani::cover!(bad && exempt, "clock: a stop honoured at a bad clock");
+        kani::cover!(!bad && refusal.is_none(), "clock: a sane clock passes");
+    }
+
     libm_stubbed! { [hypot, sqrt, atan2, sin, cos]
         /// REQ-SM-004: a request at a non-finite or backwards clock is refused
         /// for an invalid time, except a stop and the reset of a stop.
@@ -1098,43 +1166,95 @@ mod verification {
         }
     }
 
+    /// REQ-SM-007 from a kernel in `kind`: new limits (any force limit,
+    /// speed limit and elbow range, the others following the same check;
+    /// or the defaults, which are valid) are taken only in Grasp, Validated
+    /// or SafeStop and only when the whole configuration passes its check;
+    /// otherwise the configuration is unchanged. One harness per kind (all
+    /// five in one did not finish in 10 min: each kind's kernel is built
+    /// and updated on its own path), each with the covers its kind can
+    /// reach.
+    fn limits_update_from(kind: StateKind) -> Result<(), LimitUpdateRefusal> {
+        let (mut kernel, _) = kernel_in(kind);
+        let before = *kernel.config();
+        let mut limits = before.limits;
+        if kani::any() {
+            limits.max_force = kani::any();
+            limits.max_speed = kani::any();
+            limits.elbow_flexion = crate::config::Interval::new(kani::any(), kani::any());
+        }
+        let result = kernel.update_limits(limits);
+        let held = matches!(
+            kind,
+            StateKind::Grasp | StateKind::Validated | StateKind::SafeStop
+        );
+        let valid = KernelConfig { limits, ..before }.check().is_ok();
+        assert_eq!(kernel.state().kind(), kind);
+        assert_eq!(result.is_ok(), held && valid);
+        if result.is_ok() {
+            assert_eq!(kernel.config().limits, limits);
+        } else {
+            assert_eq!(*kernel.config(), before);
+        }
+        result
+    }
+
     libm_stubbed! { [hypot, sqrt, atan2, sin, cos]
-        /// REQ-SM-007: new limits are taken only in Grasp, Validated or
-        /// SafeStop and only when the whole configuration passes its check;
-        /// otherwise the configuration is unchanged.
+        /// REQ-SM-007 in Grasp (see [`limits_update_from`]).
         #[cfg_attr(kani, kani::proof)]
         #[cfg_attr(kani, kani::unwind(24))]
-        pub(super) fn verify_req_sm_007_limits_change_only_while_held() {
-            from_any_state(|kind| {
-                let (mut kernel, _) = kernel_in(kind);
-                let before = *kernel.config();
-                let mut limits = before.limits;
-                // Any force limit, speed limit and elbow range (the others follow
-                // the same check); or the defaults, which are valid.
-                if kani::any() {
-                    limits.max_force = kani::any();
-                    limits.max_speed = kani::any();
-                    limits.elbow_flexion = crate::config::Interval::new(kani::any(), kani::any());
-                }
-                let kind = kernel.state().kind();
-                let result = kernel.update_limits(limits);
-                let held = matches!(
-                    kind,
-                    StateKind::Grasp | StateKind::Validated | StateKind::SafeStop
-                );
-                let valid = KernelConfig { limits, ..before }.check().is_ok();
-                assert_eq!(result.is_ok(), held && valid);
-                if result.is_ok() {
-                    assert_eq!(kernel.config().limits, limits);
-                } else {
-                    assert_eq!(*kernel.config(), before);
-                }
-                kani::cover!(result.is_ok(), "limits: taken");
-                kani::cover!(
-                    result == Err(LimitUpdateRefusal::NotAllowedInState(StateKind::Manipulate)),
-                    "limits: refused while moving"
-                );
-            });
+        pub(super) fn verify_req_sm_007_limits_change_in_grasp() {
+            let result = limits_update_from(StateKind::Grasp);
+            kani::cover!(result.is_ok(), "grasp: limits taken");
+            kani::cover!(result.is_err(), "grasp: invalid limits refused");
+        }
+    }
+
+    libm_stubbed! { [hypot, sqrt, atan2, sin, cos]
+        /// REQ-SM-007 in Estimate (see [`limits_update_from`]).
+        #[cfg_attr(kani, kani::proof)]
+        #[cfg_attr(kani, kani::unwind(24))]
+        pub(super) fn verify_req_sm_007_limits_refused_while_estimating() {
+            let result = limits_update_from(StateKind::Estimate);
+            kani::cover!(
+                result == Err(LimitUpdateRefusal::NotAllowedInState(StateKind::Estimate)),
+                "estimate: limits refused"
+            );
+        }
+    }
+
+    libm_stubbed! { [hypot, sqrt, atan2, sin, cos]
+        /// REQ-SM-007 in Validated (see [`limits_update_from`]).
+        #[cfg_attr(kani, kani::proof)]
+        #[cfg_attr(kani, kani::unwind(24))]
+        pub(super) fn verify_req_sm_007_limits_change_in_validated() {
+            let result = limits_update_from(StateKind::Validated);
+            kani::cover!(result.is_ok(), "validated: limits taken");
+            kani::cover!(result.is_err(), "validated: invalid limits refused");
+        }
+    }
+
+    libm_stubbed! { [hypot, sqrt, atan2, sin, cos]
+        /// REQ-SM-007 in Manipulate (see [`limits_update_from`]).
+        #[cfg_attr(kani, kani::proof)]
+        #[cfg_attr(kani, kani::unwind(24))]
+        pub(super) fn verify_req_sm_007_limits_refused_while_manipulating() {
+            let result = limits_update_from(StateKind::Manipulate);
+            kani::cover!(
+                result == Err(LimitUpdateRefusal::NotAllowedInState(StateKind::Manipulate)),
+                "manipulate: limits refused"
+            );
+        }
+    }
+
+    libm_stubbed! { [hypot, sqrt, atan2, sin, cos]
+        /// REQ-SM-007 in SafeStop (see [`limits_update_from`]).
+        #[cfg_attr(kani, kani::proof)]
+        #[cfg_attr(kani, kani::unwind(24))]
+        pub(super) fn verify_req_sm_007_limits_change_in_safe_stop() {
+            let result = limits_update_from(StateKind::SafeStop);
+            kani::cover!(result.is_ok(), "safe stop: limits taken");
+            kani::cover!(result.is_err(), "safe stop: invalid limits refused");
         }
     }
 
@@ -1173,9 +1293,34 @@ mod verification {
             );
             kani::check("clock", 5_000, verify_req_sm_004_requests_need_a_sane_clock);
             kani::check(
-                "limits",
+                "the clock first",
                 5_000,
-                verify_req_sm_007_limits_change_only_while_held,
+                verify_req_sm_004_the_clock_refuses_first,
+            );
+            kani::check(
+                "limits in grasp",
+                1_000,
+                verify_req_sm_007_limits_change_in_grasp,
+            );
+            kani::check(
+                "limits while estimating",
+                1_000,
+                verify_req_sm_007_limits_refused_while_estimating,
+            );
+            kani::check(
+                "limits in validated",
+                1_000,
+                verify_req_sm_007_limits_change_in_validated,
+            );
+            kani::check(
+                "limits while manipulating",
+                1_000,
+                verify_req_sm_007_limits_refused_while_manipulating,
+            );
+            kani::check(
+                "limits in safe stop",
+                1_000,
+                verify_req_sm_007_limits_change_in_safe_stop,
             );
         }
 
