@@ -111,7 +111,7 @@ pub fn run(log: &Path, method: MethodArg, arm: ArmModel, json: bool) -> Result<(
     emit(&format!(
         "method    {}\nl1        {:.4} m (upper arm)\nl2        {:.4} m (forearm, elbow to grasp)\n\
          elbow     ({:.4}, {:.4}) m, frame S, t = 0\nshoulder  ({:.4}, {:.4}) m, frame S\nsamples   {}\n\
-         outliers  {} (isolated samples left out of the fits)\nvalidator {}\n",
+         outliers  {} (isolated samples left out of the fits)\nuncertainty {}\nvalidator {}\n",
         report.method,
         report.l1,
         report.l2,
@@ -121,6 +121,14 @@ pub fn run(log: &Path, method: MethodArg, arm: ArmModel, json: bool) -> Result<(
         report.shoulder[1],
         report.samples,
         report.evidence.outliers,
+        report
+            .evidence
+            .uncertainty
+            .map_or("not measured by this method".to_string(), |u| format!(
+                "l1 {:.3} mm, l2 {:.3} mm (standard, from the fits' residuals)",
+                u.upper_arm * 1e3,
+                u.forearm * 1e3
+            )),
         report.rejection.as_deref().unwrap_or("accepted")
     ))
 }

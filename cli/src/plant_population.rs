@@ -74,6 +74,8 @@ pub struct SubjectOutcome {
     pub error_shoulder: Option<f64>,
     /// Distance of the elbow at t = 0 from the truth [m].
     pub error_elbow: Option<f64>,
+    /// Standard uncertainty of l1, l2 as the estimator reported it [m].
+    pub uncertainty: Option<[f64; 2]>,
     /// Joint extremes during Estimate (the plant's own joints) [rad].
     pub estimate_joints: JointExtremes,
     /// Joint extremes during Manipulate [rad].
@@ -143,6 +145,7 @@ impl SubjectOutcome {
             error_l2: model.and_then(|m| m.error_l2),
             error_shoulder: model.and_then(|m| m.error_shoulder),
             error_elbow: model.and_then(|m| m.error_elbow),
+            uncertainty: model.and_then(|m| Some([m.uncertainty_l1?, m.uncertainty_l2?])),
             estimate_joints: joints("estimate"),
             manipulate_joints: joints("manipulate"),
             max_force_n: report.max_force_n,

@@ -49,6 +49,9 @@ pub struct ArmOutcome {
     pub within_limits: bool,
     /// |l1 − truth|, |l2 − truth| [m] of the validated model.
     pub error: Option<[f64; 2]>,
+    /// The standard uncertainty of l1 and l2 the estimator reported [m]
+    /// (`limb_kernel::estimation::LengthUncertainty`).
+    pub uncertainty: Option<[f64; 2]>,
     /// Why the kernel stopped instead of validating, in words.
     pub refusal: Option<String>,
     /// The same in the kernel's vocabulary (`stop reason: what`, e.g.
@@ -107,6 +110,10 @@ pub struct PopulationReport {
     pub error_l2: Spread,
     /// Validated models more than 1 mm off in l1 or l2.
     pub over_1mm: usize,
+    /// Validated models whose l1 and l2 errors are each within k = 1, 2, 3
+    /// of their reported standard uncertainties (a model without one is
+    /// counted outside).
+    pub within_uncertainty: [usize; 3],
     /// Arms stopped instead of validated, by reason.
     pub refused: BTreeMap<String, usize>,
     /// Estimation duration, start to Validated [s].
@@ -156,6 +163,10 @@ fn run_arm(l1: f64, l2: f64, seed: u64, config: &KernelConfig) -> Result<ArmOutc
             .model
             .as_ref()
             .and_then(|m| Some([m.error_l1?.abs(), m.error_l2?.abs()])),
+        uncertainty: report
+            .model
+            .as_ref()
+            .and_then(|m| Some([m.uncertainty_l1?, m.uncertainty_l2?])),
         refusal,
         refusal_reason,
         estimate_duration,
@@ -214,6 +225,15 @@ pub fn population(arms: usize, seed: u64) -> Result<PopulationReport, CliError> 
         error_l1: Spread::of(errors.iter().map(|e| e[0]).collect()),
         error_l2: Spread::of(errors.iter().map(|e| e[1]).collect()),
         over_1mm: errors.iter().filter(|e| e[0] > 1e-3 || e[1] > 1e-3).count(),
+        within_uncertainty: [1.0, 2.0, 3.0].map(|k| {
+            outcomes
+                .iter()
+                .filter(|o| match (o.error, o.uncertainty) {
+                    (Some(e), Some(u)) => e[0] <= k * u[0] && e[1] <= k * u[1],
+                    _ => false,
+                })
+                .count()
+        }),
         refused,
         estimate_duration: Spread::of(
             outcomes
@@ -250,6 +270,7 @@ pub fn run(args: &PopulationArgs) -> Result<(), CliError> {
         "limb population: {} random arms (l1 0.22-0.38 m, l2 0.15-0.26 m), seed {}, noise on\n\
          joints within limits during Estimate: {}/{} (max hyperextension {:.2}°, max shoulder elevation {:.1}°)\n\
          validated: {}/{}; |Δl1| {}; |Δl2| {}; over 1 mm: {}\n\
+         both errors within 1, 2, 3 standard uncertainties: {}, {}, {} of {}\n\
          estimation duration: median {:.1} s, max {:.1} s; sessions completed: {}\n",
         report.arms,
         report.seed,
@@ -262,6 +283,10 @@ pub fn run(args: &PopulationArgs) -> Result<(), CliError> {
         mm(report.error_l1),
         mm(report.error_l2),
         report.over_1mm,
+        report.within_uncertainty[0],
+        report.within_uncertainty[1],
+        report.within_uncertainty[2],
+        report.validated,
         report.estimate_duration.median,
         report.estimate_duration.max,
         report.completed,

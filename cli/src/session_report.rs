@@ -81,6 +81,13 @@ pub struct ModelReport {
     /// Distance between fitted and true elbow at t = 0 [m], when given.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub error_elbow: Option<f64>,
+    /// Standard uncertainty of l1 and of l2 as the estimator measured it
+    /// [m] (`limb_kernel::estimation::LengthUncertainty`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub uncertainty_l1: Option<f64>,
+    /// Of l2 [m].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub uncertainty_l2: Option<f64>,
 }
 
 /// Wall time of every `Kernel::step` of the session [s].
@@ -290,6 +297,8 @@ fn model_report(model: &FittedModel, truth: &TruthReport) -> ModelReport {
         error_l2: truth.l2.map(|l2| model.forearm_length - l2),
         error_shoulder: off(model.shoulder, truth.shoulder),
         error_elbow: off(model.elbow, truth.elbow),
+        uncertainty_l1: model.uncertainty.map(|u| u.upper_arm),
+        uncertainty_l2: model.uncertainty.map(|u| u.forearm),
     }
 }
 

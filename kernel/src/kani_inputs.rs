@@ -156,6 +156,7 @@ pub(crate) fn validated_arm() -> ValidatedArm {
             upper_arm_samples: 1000,
             outliers: 0,
             resolution: 0.0,
+            uncertainty: None,
         },
     };
     let accepted = validate(

@@ -51,7 +51,7 @@
 
 use crate::arm::ArmGeometry;
 use crate::config::ValidationLimits;
-use crate::estimation::ArmEstimate;
+use crate::estimation::{ArmEstimate, FitEvidence};
 use crate::geometry::Point;
 
 /// Which validation check failed.
@@ -185,6 +185,12 @@ pub fn resolution_tolerance(limit: f64, resolution: f64, ceiling: f64) -> f64 {
     limit.max((RESOLUTION_SHARE * resolution).min(ceiling))
 }
 
+/// True when the evidence's length uncertainty, if it has one, is finite.
+fn uncertainty_is_finite(v: &FitEvidence) -> bool {
+    v.uncertainty
+        .is_none_or(|u| u.upper_arm.is_finite() && u.forearm.is_finite())
+}
+
 fn outside(value: f64, low: f64, high: f64) -> bool {
     !(low..=high).contains(&value)
 }
@@ -243,6 +249,7 @@ pub fn validate(
         && e.elbow.is_finite()
         && e.shoulder.is_finite()
         && e.path_shoulder.is_finite()
+        && uncertainty_is_finite(v)
         && grasp_start.is_finite())
     {
         return Err(Rejection::NonFinite);
@@ -317,7 +324,7 @@ pub fn validate(
 #[cfg(any(test, kani))]
 mod verification {
     use super::*;
-    use crate::estimation::{FitEvidence, Method};
+    use crate::estimation::{LengthUncertainty, Method};
     #[cfg(not(kani))]
     use limb_kani_stand_in as kani;
 
@@ -345,6 +352,11 @@ mod verification {
                         && e.path_shoulder.is_finite()
                         && grasp_start.is_finite(),
                     "accepted a non-finite point",
+                )?;
+                ensure(
+                    v.uncertainty
+                        .is_none_or(|u| u.upper_arm.is_finite() && u.forearm.is_finite()),
+                    "accepted a non-finite uncertainty",
                 )?;
                 ensure(
                     !outside(
@@ -468,8 +480,9 @@ mod verification {
         }
     }
 
-    /// REQ-VAL-001: for any estimate and start point the validator accepts
-    /// only within its ranges and names the check a rejection failed.
+    /// REQ-VAL-001, REQ-EST-008: for any estimate and start point (a length
+    /// uncertainty or none) the validator accepts only within its ranges,
+    /// every value finite, and names the check a rejection failed.
     #[cfg_attr(kani, kani::proof)]
     #[cfg_attr(kani, kani::unwind(24))]
     #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
@@ -499,6 +512,14 @@ mod verification {
                 upper_arm_samples: 1000,
                 outliers: 0,
                 resolution: any_or(0.0),
+                uncertainty: if kani::any() {
+                    None
+                } else {
+                    Some(LengthUncertainty {
+                        upper_arm: any_or(1e-4),
+                        forearm: any_or(1e-4),
+                    })
+                },
             },
         };
         let start = Point::new(any_or(0.0), any_or(0.0));

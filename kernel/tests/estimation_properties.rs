@@ -184,6 +184,7 @@ proptest! {
                 upper_arm_samples: 100,
                 outliers: 0,
                 resolution: 0.0,
+                uncertainty: None,
             },
         };
         let limits = ValidationLimits::default();
@@ -981,6 +982,44 @@ proptest! {
         let fixed = limb_kernel::estimation::estimate_online(&path, &ValidationLimits::default()).unwrap();
         let reach = 0.8 * along.hypot(rise);
         prop_assert!(fixed.shoulder.distance(shoulder) > 0.3 * reach, "{fixed:?}");
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+    /// REQ-EST-008: the kernel's estimate of a person's lift (white noise
+    /// of σ on the grasp point, σ / l2 on its pitch) reports the standard
+    /// uncertainty of l1 and l2: finite, not negative, below 1 nm without
+    /// noise, and with noise at least a tenth of σ / √n (no fit of n
+    /// samples knows a radius better).
+    #[test]
+    fn req_est_008_the_uncertainty_is_reported_finite_and_vanishes_without_noise(
+        l1 in 0.24f64..0.34, l2 in 0.18f64..0.25, sigma in 0.0f64..5e-4,
+        noise_free in any::<bool>(), seed in any::<u64>(),
+    ) {
+        let sigma = if noise_free { 0.0 } else { sigma };
+        let mut draw = normal(seed);
+        let path: Vec<PathSample> = persons_lift(l1, l2, 0.0, 0.0, [0.0, 0.0])
+            .into_iter()
+            .map(|mut s| {
+                s.pose = Pose::new(
+                    s.pose.x + sigma * draw(),
+                    s.pose.z + sigma * draw(),
+                    s.pose.psi + sigma / l2 * draw(),
+                );
+                s
+            })
+            .collect();
+        let e = limb_kernel::estimation::estimate_online(&path, &ValidationLimits::default()).unwrap();
+        let u = e.evidence.uncertainty.expect("the online estimator measures it");
+        for value in [u.upper_arm, u.forearm] {
+            prop_assert!(value.is_finite() && value >= 0.0, "{u:?}");
+            if sigma == 0.0 {
+                prop_assert!(value < 1e-9, "{u:?}");
+            } else {
+                prop_assert!(value >= 0.1 * sigma / (path.len() as f64).sqrt(), "{u:?} at {sigma}");
+            }
+        }
     }
 }
 

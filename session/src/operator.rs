@@ -16,6 +16,7 @@
 use crate::supervisor::Supervisor;
 use core::fmt;
 use limb_kernel::arm::JointAngles;
+use limb_kernel::estimation::LengthUncertainty;
 use limb_kernel::geometry::Point;
 use limb_kernel::trace::{Event, TraceEvent};
 use limb_kernel::validate::ValidatedArm;
@@ -65,6 +66,10 @@ pub struct FittedModel {
     pub shoulder: Point,
     /// Elbow at t = 0 [m].
     pub elbow: Point,
+    /// Standard uncertainty of l1 and l2 [m], as the kernel's estimator
+    /// measured it (`limb_kernel::estimation::LengthUncertainty`); `None`
+    /// when the method does not measure it.
+    pub uncertainty: Option<LengthUncertainty>,
 }
 
 impl FittedModel {
@@ -76,6 +81,7 @@ impl FittedModel {
             forearm_length: estimate.forearm_length,
             shoulder: estimate.shoulder,
             elbow: estimate.elbow,
+            uncertainty: estimate.evidence.uncertainty,
         }
     }
 }

@@ -86,6 +86,7 @@ fn estimate(
             upper_arm_samples: 100,
             outliers: 0,
             resolution,
+            uncertainty: None,
         },
     }
 }
@@ -152,6 +153,7 @@ fn req_val_001_a_consistent_estimate_is_accepted() {
             upper_arm_samples: 100,
             outliers: 0,
             resolution: 0.0,
+            uncertainty: None,
         },
     };
     assert!(validate(&e, Point::new(0.0, 0.0), &ValidationLimits::default()).is_ok());

@@ -32,6 +32,9 @@ pub struct ResidualBias {
     sum: f64,
     count: usize,
     worst: f64,
+    /// Σ of the closed blocks' squared means [m²], and how many closed.
+    block_squares: f64,
+    blocks: usize,
 }
 
 impl ResidualBias {
@@ -47,6 +50,8 @@ impl ResidualBias {
     fn close_block(&mut self) {
         if self.count > 0 && !self.worst.is_nan() {
             let mean = libm::fabs(self.sum / self.count as f64);
+            self.block_squares += mean * mean;
+            self.blocks += 1;
             // NaN propagates (and stays).
             if mean.is_nan() || mean > self.worst {
                 self.worst = mean;
@@ -54,6 +59,18 @@ impl ResidualBias {
         }
         self.sum = 0.0;
         self.count = 0;
+    }
+
+    /// The mean square of the whole blocks' means so far [m²] (0 before
+    /// the first block closes): the variance of a block mean about the
+    /// circle, which white noise of variance σ² makes σ² / [`BIAS_BLOCK`]
+    /// and residuals correlated over many samples make larger.
+    pub fn block_mean_square(&self) -> f64 {
+        if self.blocks == 0 {
+            0.0
+        } else {
+            self.block_squares / self.blocks as f64
+        }
     }
 
     /// The largest block mean so far, the open block included when it

@@ -103,6 +103,27 @@ pub struct FitEvidence {
     /// the residual bias and the methods' disagreement half of it
     /// (`crate::validate`).
     pub resolution: f64,
+    /// Standard uncertainty of the lengths ([`LengthUncertainty`]); `None`
+    /// for the methods other than [`Method::Online`], which do not
+    /// measure it.
+    pub uncertainty: Option<LengthUncertainty>,
+}
+
+/// Standard uncertainty (one standard deviation) of the fitted lengths
+/// [m], each from its circle's last Gauss-Newton pass: the covariance of
+/// the radius under the pass's residual variance, inflated by how far the
+/// residuals' 0.5 s block means say they are correlated (batch means).
+/// It is the noise's share of the error and the part of a model error that
+/// shows in the residuals; an error the circle absorbs (a bias every
+/// sample shares) it cannot see.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct LengthUncertainty {
+    /// Of the upper-arm length l1 (the glenohumeral centre at rest to the
+    /// elbow, with a shoulder-rhythm prior; else the elbow path's radius) [m].
+    pub upper_arm: f64,
+    /// Of the forearm length l2 [m].
+    pub forearm: f64,
 }
 
 /// An unvalidated arm estimate (frame S). Turned into a
@@ -382,6 +403,7 @@ pub fn estimate_arm(path: &[PathSample], method: Method) -> Result<ArmEstimate, 
             outliers: phases.forearm.len().saturating_sub(forearm_samples)
                 + phases.upper_arm.len().saturating_sub(upper_arm_samples),
             resolution: 0.0,
+            uncertainty: None,
         },
     })
 }
