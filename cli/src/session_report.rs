@@ -313,16 +313,20 @@ pub fn human(report: &SessionReport, header: &str) -> String {
     let t = &report.truth;
     let _ = match &report.model {
         Some(m) => {
-            let length =
-                |name: &str, fitted: f64, truth: Option<f64>, error: Option<f64>| match truth
-                    .zip(error)
-                {
+            let length = |name: &str,
+                          fitted: f64,
+                          uncertainty: Option<f64>,
+                          truth: Option<f64>,
+                          error: Option<f64>| {
+                let u = uncertainty.map_or(String::new(), |u| format!(", u {:.2} mm", u * 1e3));
+                match truth.zip(error) {
                     Some((truth, error)) => format!(
-                        "{name} {fitted:.4} m (truth {truth:.4}, {:+.2} mm)",
+                        "{name} {fitted:.4} m{u} (truth {truth:.4}, {:+.2} mm)",
                         error * 1e3
                     ),
-                    None => format!("{name} {fitted:.4} m"),
-                };
+                    None => format!("{name} {fitted:.4} m{u}"),
+                }
+            };
             let shoulder = match t.shoulder.zip(m.error_shoulder) {
                 Some(([x, z], error)) => format!(
                     "shoulder ({:.4}, {:.4}) m (truth ({x:.4}, {z:.4}), {:.2} mm off)",
@@ -335,8 +339,8 @@ pub fn human(report: &SessionReport, header: &str) -> String {
             writeln!(
                 out,
                 "model: {}  {}  {shoulder}",
-                length("l1", m.l1, t.l1, m.error_l1),
-                length("l2", m.l2, t.l2, m.error_l2),
+                length("l1", m.l1, m.uncertainty_l1, t.l1, m.error_l1),
+                length("l2", m.l2, m.uncertainty_l2, t.l2, m.error_l2),
             )
         }
         None => writeln!(out, "model: none validated"),
