@@ -40,6 +40,11 @@
 //! 6. the upper-arm phase's evidence pass (RMS residual, arc) about the
 //!    elbow path's circle.
 //!
+//! Each Gauss-Newton pass also gives its radius's standard uncertainty
+//! (`PassSums::radius_uncertainty`, REQ-EST-008); the last pass of each
+//! circle's is reported: l2's from step 1, l1's from step 5 (with a
+//! prior) or step 4.
+//!
 //! Every pass leaves out the samples that are isolated outliers
 //! ([`super::outlier`]) or not known within a quantizer's cell; the
 //! evidence counts them.
@@ -52,7 +57,8 @@
 //! A pass costs about 60 flops, one square root and (elbow points) one
 //! sine and cosine per sample, the forearm's evidence and a rhythm pass
 //! one atan2 more; a call does at most `budget` samples (half
-//! of it in a rhythm pass) and at most one 3 × 3 solve. A whole refinement
+//! of it in a rhythm pass) and at most two 3 × 3 inverses (the step's and
+//! the radius's uncertainty's, REQ-EST-008). A whole refinement
 //! is 2 · [`ITERATIONS`] + 5 passes, [`MAX_PASSES`] with a
 //! shoulder-rhythm prior.
 
