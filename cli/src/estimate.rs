@@ -111,7 +111,7 @@ pub fn run(log: &Path, method: MethodArg, arm: ArmModel, json: bool) -> Result<(
     emit(&format!(
         "method    {}\nl1        {:.4} m (upper arm)\nl2        {:.4} m (forearm, elbow to grasp)\n\
          elbow     ({:.4}, {:.4}) m, frame S, t = 0\nshoulder  ({:.4}, {:.4}) m, frame S\nsamples   {}\n\
-         outliers  {} (isolated samples left out of the fits)\nuncertainty {}\nvalidator {}\n",
+         outliers  {} (isolated samples left out of the fits)\nuncertainty {}\nplay      {}\nvalidator {}\n",
         report.method,
         report.l1,
         report.l2,
@@ -129,6 +129,10 @@ pub fn run(log: &Path, method: MethodArg, arm: ArmModel, json: bool) -> Result<(
                 u.upper_arm * 1e3,
                 u.forearm * 1e3
             )),
+        report.evidence.play.map_or("not measured by this method".to_string(), |w| format!(
+            "{:.1} mrad in psi (measured in the upper-arm phase and read out)",
+            w * 1e3
+        )),
         report.rejection.as_deref().unwrap_or("accepted")
     ))
 }

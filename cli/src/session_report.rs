@@ -88,6 +88,9 @@ pub struct ModelReport {
     /// Of l2 [m].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub uncertainty_l2: Option<f64>,
+    /// The play in psi the estimator measured and read out [rad].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub play: Option<f64>,
 }
 
 /// Wall time of every `Kernel::step` of the session [s].
@@ -299,6 +302,7 @@ fn model_report(model: &FittedModel, truth: &TruthReport) -> ModelReport {
         error_elbow: off(model.elbow, truth.elbow),
         uncertainty_l1: model.uncertainty.map(|u| u.upper_arm),
         uncertainty_l2: model.uncertainty.map(|u| u.forearm),
+        play: model.play,
     }
 }
 
@@ -336,9 +340,12 @@ pub fn human(report: &SessionReport, header: &str) -> String {
                 ),
                 None => format!("shoulder ({:.4}, {:.4}) m", m.shoulder[0], m.shoulder[1]),
             };
+            let play = m.play.map_or(String::new(), |w| {
+                format!("  play in psi {:.1} mrad", w * 1e3)
+            });
             writeln!(
                 out,
-                "model: {}  {}  {shoulder}",
+                "model: {}  {}  {shoulder}{play}",
                 length("l1", m.l1, m.uncertainty_l1, t.l1, m.error_l1),
                 length("l2", m.l2, m.uncertainty_l2, t.l2, m.error_l2),
             )

@@ -125,11 +125,12 @@ fn an_emergency_stop_mid_lift_holds_the_musculoskeletal_arm() {
 /// `person` arm (`limb population --plant myoarm --subjects all`; README
 /// "A person's arm"): at least 80 % of the non-spastic subjects validated
 /// with l1 and l2 within 5 mm of the anatomy (measured at this noise seed,
-/// 2026, 9 of 10: l1 within 1.6 mm, l2 within 2.5 mm, the shoulder at rest
-/// within 3.7 mm; the tenth, `cast`, stopped by the force monitor), no
-/// subject validated more than 10 mm off, every validated one within the
-/// README's figures (l1 1.8 mm, l2 2.6 mm, shoulder 3.9 mm at seed 4711)
-/// with a margin (2.5, 3.0, 5.0 mm), no joint past its default limit, and
+/// 2026, 9 of 10 since the play in psi is read out: l1 within 2.2 mm, l2
+/// within 2.5 mm, the shoulder at rest within 2.3 mm; the tenth, `cast`,
+/// stopped by the force monitor), no subject validated more than 10 mm
+/// off, every validated one within those figures with a margin (2.5, 3.0,
+/// 3.0 mm; README at seed 4711: l1 3.5 mm, l2 2.6 mm, shoulder 2.1 mm),
+/// no joint past its default limit, and
 /// every spastic subject validated within 5 mm or stopped with a named
 /// cause.
 #[test]
@@ -184,7 +185,7 @@ fn req_est_006_a_persons_arm_is_estimated_on_the_musculoskeletal_subjects() {
                 o["error_l2"].as_f64().unwrap().abs() <= 3.0e-3,
                 "{name}: {o}"
             );
-            assert!(o["error_shoulder"].as_f64().unwrap() <= 5e-3, "{name}: {o}");
+            assert!(o["error_shoulder"].as_f64().unwrap() <= 3e-3, "{name}: {o}");
         }
         if name.contains("spastic") {
             let named = o["refusal"].as_str().is_some_and(|r| r.contains("stop:"));

@@ -157,6 +157,7 @@ pub(crate) fn validated_arm() -> ValidatedArm {
             outliers: 0,
             resolution: 0.0,
             uncertainty: None,
+            play: None,
         },
     };
     let accepted = validate(

@@ -520,6 +520,7 @@ mod verification {
                         forearm: any_or(1e-4),
                     })
                 },
+                play: None,
             },
         };
         let start = Point::new(any_or(0.0), any_or(0.0));

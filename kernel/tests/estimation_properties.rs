@@ -185,6 +185,7 @@ proptest! {
                 outliers: 0,
                 resolution: 0.0,
                 uncertainty: None,
+                play: None,
             },
         };
         let limits = ValidationLimits::default();
@@ -1055,5 +1056,77 @@ proptest! {
             bias.add(0.0);
         }
         prop_assert!(bias.worst().is_nan());
+    }
+}
+
+/// A path of the given psi readings, 10 ms apart, the grasp at rest.
+fn psi_path(psi: &[f64]) -> Vec<PathSample> {
+    psi.iter()
+        .enumerate()
+        .map(|(i, &psi)| PathSample {
+            time: i as f64 * 0.01,
+            pose: Pose::new(0.0, 0.0, psi),
+            wrench: Wrench::ZERO,
+        })
+        .collect()
+}
+
+proptest! {
+    /// REQ-EST-009: a psi that never falls by the hysteresis (a lift: any
+    /// steps up, pauses, dips of noise under 10 mrad) has no turn: every
+    /// sample is read as recorded (no share of the play). A psi that then
+    /// falls on from its highest reading by more than the hysteresis is
+    /// read with all of the play from the sample that goes past it, and
+    /// from the highest reading to the one before with the share
+    /// interpolated in time.
+    #[test]
+    fn req_est_009_the_reader_finds_the_turns_and_only_them(
+        steps in prop::collection::vec(0.0..0.02f64, 2..200),
+        dips in prop::collection::vec(-0.0049..0.0049f64, 200),
+        fall in prop::collection::vec(0.002..0.02f64, 1..100),
+    ) {
+        use limb_kernel::estimation::play::{PlayReader, HYSTERESIS};
+        let mut rising = Vec::new();
+        let mut level = 0.3;
+        for (step, dip) in steps.iter().zip(&dips) {
+            level += step;
+            rising.push(level + dip);
+        }
+        // Dips of ±4.9 mrad about a non-decreasing level never fall 10 mrad
+        // below the highest reading.
+        let path = psi_path(&rising);
+        let mut reader = PlayReader::new();
+        for index in 0..path.len() {
+            prop_assert_eq!(reader.read(&path, index), Some(0.0));
+        }
+        prop_assert_eq!(reader.read(&path, path.len()), None);
+
+        // A lift, then a fall from its top.
+        let top = rising.iter().copied().fold(f64::MIN, f64::max);
+        let peak = rising.iter().position(|&p| p == top).expect("a top");
+        let mut psi = rising[..=peak].to_vec();
+        let mut value = top;
+        for drop in &fall {
+            value -= drop;
+            psi.push(value);
+        }
+        let path = psi_path(&psi);
+        let switch = psi
+            .iter()
+            .skip(peak)
+            .position(|&p| p < top - HYSTERESIS)
+            .map(|i| i + peak);
+        let mut reader = PlayReader::new();
+        for index in 0..path.len() {
+            let expected = match switch {
+                Some(switch) if index >= switch => 1.0,
+                Some(switch) if index >= peak => {
+                    (path[index].time - path[peak].time) / (path[switch].time - path[peak].time)
+                }
+                _ => 0.0,
+            };
+            let read = reader.read(&path, index).expect("a sample of the path");
+            prop_assert!((read - expected).abs() < 1e-12, "sample {}: {} for {}", index, read, expected);
+        }
     }
 }

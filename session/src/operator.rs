@@ -70,6 +70,10 @@ pub struct FittedModel {
     /// measured it (`limb_kernel::estimation::LengthUncertainty`); `None`
     /// when the method does not measure it.
     pub uncertainty: Option<LengthUncertainty>,
+    /// The play in psi the estimator measured and read out [rad]
+    /// (`limb_kernel::estimation::FitEvidence::play`); `None` when the
+    /// method does not measure it.
+    pub play: Option<f64>,
 }
 
 impl FittedModel {
@@ -82,6 +86,7 @@ impl FittedModel {
             shoulder: estimate.shoulder,
             elbow: estimate.elbow,
             uncertainty: estimate.evidence.uncertainty,
+            play: estimate.evidence.play,
         }
     }
 }

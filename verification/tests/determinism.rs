@@ -112,7 +112,7 @@ fn session_inputs() -> Vec<Input> {
     let arm = arm(0.28, 0.19);
     let mut inputs = Vec::new();
     // At these 100 Hz frames the estimation ends ≈ 30 s in (the refinement
-    // runs one 16-sample slice per step, ≈ 7 s here); approve at 42 s.
+    // runs one 12-sample slice per step, ≈ 9.5 s here); approve at 42 s.
     for i in 0..4500u32 {
         let t = f64::from(i) * FRAME_PERIOD;
         if i == 1 {

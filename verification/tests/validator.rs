@@ -87,6 +87,7 @@ fn estimate(
             outliers: 0,
             resolution,
             uncertainty: None,
+            play: None,
         },
     }
 }
@@ -154,6 +155,7 @@ fn req_val_001_a_consistent_estimate_is_accepted() {
             outliers: 0,
             resolution: 0.0,
             uncertainty: None,
+            play: None,
         },
     };
     assert!(validate(&e, Point::new(0.0, 0.0), &ValidationLimits::default()).is_ok());

@@ -30,6 +30,7 @@ pub mod moments;
 pub mod online;
 pub mod outlier;
 mod phase;
+pub mod play;
 pub mod refine;
 
 pub use circle::{
@@ -107,6 +108,10 @@ pub struct FitEvidence {
     /// for the methods other than [`Method::Online`], which do not
     /// measure it.
     pub uncertainty: Option<LengthUncertainty>,
+    /// The play (backlash) in psi the upper-arm fits measured and read out
+    /// of the falling samples [rad] ([`play`]); `None` for the methods
+    /// other than [`Method::Online`], which do not measure it.
+    pub play: Option<f64>,
 }
 
 /// Standard uncertainty (one standard deviation) of the fitted lengths
@@ -404,6 +409,7 @@ pub fn estimate_arm(path: &[PathSample], method: Method) -> Result<ArmEstimate, 
                 + phases.upper_arm.len().saturating_sub(upper_arm_samples),
             resolution: 0.0,
             uncertainty: None,
+            play: None,
         },
     })
 }

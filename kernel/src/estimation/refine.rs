@@ -27,9 +27,14 @@
 //!    pitch offset δ (`crate::arm`), the mean over its samples of the
 //!    pitch minus the forearm's elevation from the refined resting elbow;
 //! 3. one pass of Kåsa moments of the upper-arm phase's elbow points under
-//!    the refined l2 and δ (the algebraic answer, and the start of step 4);
+//!    the refined l2 and δ (the start of step 4);
 //! 4. [`ITERATIONS`] Gauss-Newton passes on those elbow points: the
-//!    elbow path's circle (the effective fixed shoulder the monitors use);
+//!    elbow path's circle (the effective fixed shoulder the monitors use)
+//!    and the play w in psi ([`super::play`]: every upper-arm pass follows
+//!    psi's direction and reads a falling sample's psi less w, a turn's
+//!    dead band less the share interpolated in time), w a fourth
+//!    parameter under the prior
+//!    [`PLAY_PRIOR`] of no play;
 //! 5. with a shoulder-rhythm prior ρ (`ValidationLimits::shoulder_rhythm`),
 //!    [`ITERATIONS`] Gauss-Newton passes on the elbow points with the
 //!    shoulder's own motion taken out, Eᵢ − φᵢ ρ (φᵢ the elbow's angle
@@ -37,11 +42,12 @@
 //!    l1 and the glenohumeral centre at rest. Without a prior (a fixed
 //!    shoulder) they are the elbow path's circle and these passes are
 //!    skipped;
-//! 6. the upper-arm phase's evidence pass (RMS residual, arc) about the
-//!    elbow path's circle.
+//! 6. the upper-arm phase's evidence pass (RMS residual, arc, and its
+//!    Kåsa moments: the algebraic answer under the measured play) about
+//!    the elbow path's circle.
 //!
 //! Each Gauss-Newton pass also gives its radius's standard uncertainty
-//! (`PassSums::radius_uncertainty`, REQ-EST-008); the last pass of each
+//! (`PassSums::step`, REQ-EST-008); the last pass of each
 //! circle's is reported: l2's from step 1, l1's from step 5 (with a
 //! prior) or step 4.
 //!
@@ -57,8 +63,10 @@
 //! A pass costs about 60 flops, one square root and (elbow points) one
 //! sine and cosine per sample, the forearm's evidence and a rhythm pass
 //! one atan2 more; a call does at most `budget` samples (half
-//! of it in a rhythm pass) and at most two 3 × 3 inverses (the step's and
-//! the radius's uncertainty's, REQ-EST-008). A whole refinement
+//! of it in a rhythm pass) and one 4 × 4 inverse (the step's, whose
+//! radius element is also the uncertainty's, REQ-EST-008); reading psi's
+//! direction looks at most [`super::play::MAX_TURN`] samples ahead
+//! (comparisons). A whole refinement
 //! is 2 · [`ITERATIONS`] + 5 passes, [`MAX_PASSES`] with a
 //! shoulder-rhythm prior.
 
@@ -68,22 +76,27 @@ use super::moments::CircleMoments;
 use super::online::{OnlineEstimator, OnlinePhase};
 use super::outlier::is_isolated_outlier;
 use super::phase::{DEPARTURE_TOLERANCE, NOISE_MULTIPLE};
+use super::play::PlayReader;
 use super::{ArmEstimate, EstimateError, FitEvidence, LengthUncertainty, Method};
 use crate::arm::{elbow_from_grasp, pitch_offset_at};
 use crate::geometry::{angle_between, Point, Pose};
 use crate::path::PathSample;
 use core::ops::Range;
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{Matrix4, Vector4};
 
 /// Gauss-Newton passes per circle.
 pub const ITERATIONS: usize = 5;
 /// Path samples a kernel step may process. An elbow point costs a sine, a
 /// cosine and a square root: ≈ 12 500 instructions in soft-float `f64` on a
 /// Cortex-M7 (64 samples were 817 560 instructions, 1.36 ms at 600 MHz, in
-/// `firmware/session.sh`); 16 keep a slice near 0.2 million (≈ 0.35 ms).
-/// On the host a slice is ≈ 1 µs (`cargo bench -p limb-verification
-/// --bench step`); a refinement is ≈ 700 slices (0.7 s at 1 kHz).
-pub const SAMPLES_PER_STEP: usize = 16;
+/// `firmware/session.sh`); 16 kept a slice near 0.2 million (≈ 0.35 ms)
+/// until the play in psi was read (REQ-EST-009: its 4 × 4 solve, the
+/// direction's reader and its look ahead made the worst slice of 16
+/// 334 800 instructions, over the 300 000 budget); 12 keep it at
+/// 259 320 (≈ 0.43 ms). On the host a slice is ≈ 1 µs (`cargo bench -p
+/// limb-verification --bench step`); a refinement is ≈ 950 slices
+/// (≈ 1 s at 1 kHz).
+pub const SAMPLES_PER_STEP: usize = 12;
 /// Passes of a whole refinement with a shoulder-rhythm prior (the most):
 /// the forearm's moments, `ITERATIONS` fits, end and evidence; the upper
 /// arm's moments, `ITERATIONS` fits, `ITERATIONS` rhythm fits and evidence.
@@ -92,6 +105,17 @@ pub const MAX_PASSES: usize = 3 * ITERATIONS + 5;
 pub const SCALE_MULTIPLE: f64 = 3.0;
 /// Smallest Cauchy scale [m]: 3 × the position noise of `plant.md`.
 pub const MIN_SCALE: f64 = 0.3e-3;
+/// The play's prior in the upper-arm fits [m²/rad²]: no play, weighted as
+/// one sample whose point the play moves at a 0.2 m lever (a forearm's).
+/// The upper-arm phase of `plant.md`'s lift has ≈ 400 falling samples, so
+/// the prior pulls a play they measure by ≈ 0.3 %; it keeps the normal
+/// matrix invertible when no sample falls (no turn, or a pass that does
+/// not fit the play).
+pub const PLAY_PRIOR: f64 = 0.04;
+/// Standard uncertainties a measured play must exceed to be read out
+/// (fewer: the path does not show it, and it is taken as none, so that a
+/// path without play is fitted as before, REQ-EST-009).
+pub const PLAY_SIGNIFICANCE: f64 = 3.0;
 
 /// Which pass is running.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -121,8 +145,10 @@ pub enum Pass {
 /// Weighted Gauss-Newton sums of one pass, with the evidence of the phase.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 struct PassSums {
-    normal: [f64; 6],
-    gradient: [f64; 3],
+    /// JᵀWJ over (centre x, centre z, radius, play): its upper triangle.
+    normal: [[f64; 4]; 4],
+    /// JᵀWr.
+    gradient: [f64; 4],
     weighted_squares: f64,
     weights: f64,
     squares: f64,
@@ -134,7 +160,10 @@ struct PassSums {
 }
 
 impl PassSums {
-    fn add(&mut self, circle: &Circle, scale: f64, point: Point) {
+    /// Adds `point` at its residual from `circle` under Cauchy `scale`;
+    /// `along` is the point's derivative by the play [m/rad] (zero but for
+    /// a falling upper-arm sample in a pass that fits the play).
+    fn add(&mut self, circle: &Circle, scale: f64, point: Point, along: Point) {
         let dx = point.x - circle.centre.x;
         let dz = point.z - circle.centre.z;
         let distance = libm::hypot(dx, dz);
@@ -143,16 +172,20 @@ impl PassSums {
         }
         let residual = distance - circle.radius;
         let weight = 1.0 / (1.0 + (residual / scale) * (residual / scale));
-        let j = [-dx / distance, -dz / distance, -1.0];
-        let n = &mut self.normal;
-        n[0] += weight * j[0] * j[0];
-        n[1] += weight * j[0] * j[1];
-        n[2] += weight * j[0] * j[2];
-        n[3] += weight * j[1] * j[1];
-        n[4] += weight * j[1] * j[2];
-        n[5] += weight * j[2] * j[2];
-        for (g, jk) in self.gradient.iter_mut().zip(j) {
-            *g += weight * jk * residual;
+        let j = [
+            -dx / distance,
+            -dz / distance,
+            -1.0,
+            (dx * along.x + dz * along.z) / distance,
+        ];
+        // The play's row and column only where it moves the point (most
+        // samples do not: a soft-float multiply saved is ≈ 60 instructions).
+        let used = if j[3] == 0.0 { 3 } else { 4 };
+        for i in 0..used {
+            for k in i..used {
+                self.normal[i][k] += weight * j[i] * j[k];
+            }
+            self.gradient[i] += weight * j[i] * residual;
         }
         self.weighted_squares += weight * residual * residual;
         self.weights += weight;
@@ -163,38 +196,71 @@ impl PassSums {
         self.last = point;
     }
 
-    /// The circle after one Gauss-Newton step from `circle`.
-    fn step(&self, circle: &Circle) -> Result<Circle, CircleFitError> {
+    /// One Gauss-Newton step from `circle` and play `play` [rad], with
+    /// the play's prior ([`PLAY_PRIOR`], centred on no play) added: the
+    /// next circle and play, and the radius's standard uncertainty. A play
+    /// the path does not show above its noise (within
+    /// [`PLAY_SIGNIFICANCE`] of its standard uncertainty of 0) is no play:
+    /// w = 0 and the circle's step the least-squares one given it (the
+    /// joint step moved along the play's covariance column, the radius's
+    /// variance conditioned likewise: on a path without play the
+    /// 3-parameter fit's). A pass with no falling sample (every pass but
+    /// the upper arm's fits) leaves the play's row the prior's alone:
+    /// decoupled from the circle.
+    fn step(&self, circle: &Circle, play: f64) -> Result<Step, CircleFitError> {
         let n = &self.normal;
-        let normal = Matrix3::new(n[0], n[1], n[2], n[1], n[3], n[4], n[2], n[4], n[5]);
-        let delta = normal.try_inverse().ok_or(CircleFitError::Degenerate)?
-            * -Vector3::new(self.gradient[0], self.gradient[1], self.gradient[2]);
+        #[rustfmt::skip]
+        let normal = Matrix4::new(
+            n[0][0], n[0][1], n[0][2], n[0][3],
+            n[0][1], n[1][1], n[1][2], n[1][3],
+            n[0][2], n[1][2], n[2][2], n[2][3],
+            n[0][3], n[1][3], n[2][3], n[3][3] + PLAY_PRIOR,
+        );
+        let c = normal.try_inverse().ok_or(CircleFitError::Degenerate)?;
+        let g = &self.gradient;
+        let mut delta = c * -Vector4::new(g[0], g[1], g[2], g[3] + PLAY_PRIOR * play);
+        let mut play = play + delta[3];
+        let mut radius_variance = c[(2, 2)];
+        let (white, noise) = self.noise_variance();
+        // Judged under the residuals' own variance, not inflated by their
+        // correlation: the block means that an unread play leaves
+        // correlated would hide the play they show. c[(3, 3)] > 0: the
+        // prior keeps the matrix positive definite.
+        let shown = libm::fabs(play) > PLAY_SIGNIFICANCE * libm::sqrt(white * c[(3, 3)]);
+        if !shown {
+            // Minimising over the circle with the play held at 0: the
+            // joint solution moved by C[·,w] / C[w,w] × (0 − w).
+            let along = -play / c[(3, 3)];
+            for k in 0..3 {
+                delta[k] += c[(k, 3)] * along;
+            }
+            radius_variance -= c[(2, 3)] * c[(2, 3)] / c[(3, 3)];
+            play = 0.0;
+        }
         let next = Circle {
             centre: Point::new(circle.centre.x + delta[0], circle.centre.z + delta[1]),
             radius: circle.radius + delta[2],
         };
-        if next.is_valid() {
-            Ok(next)
-        } else {
-            Err(CircleFitError::NonFinite)
+        if !(next.is_valid() && play.is_finite()) {
+            return Err(CircleFitError::NonFinite);
         }
+        Ok(Step {
+            circle: next,
+            play,
+            uncertainty: libm::sqrt(noise * radius_variance),
+        })
     }
 
-    /// Standard uncertainty of the radius fitted from these sums [m]: the
-    /// Gauss-Newton covariance σ² (JᵀWJ)⁻¹ of the radius, σ² the weighted
-    /// residual variance, inflated by the residuals' correlation as batch
+    /// The variance of one residual these sums imply [m²]: σ² the
+    /// weighted residual variance, and as the Gauss-Newton covariance
+    /// σ² (JᵀWJ)⁻¹ uses it, inflated by the residuals' correlation as batch
     /// means measure it: a block mean of [`BIAS_BLOCK`] white residuals
     /// has variance σ² / [`BIAS_BLOCK`]; k = [`BIAS_BLOCK`] × the blocks'
     /// mean square / the residuals' mean square (at least 1) is how many
     /// times larger the residuals make it, so k counts the samples that
-    /// carry one sample's worth of evidence. NaN when the normal matrix is
-    /// singular or anything is not finite.
-    fn radius_uncertainty(&self) -> f64 {
-        let n = &self.normal;
-        let normal = Matrix3::new(n[0], n[1], n[2], n[1], n[3], n[4], n[2], n[4], n[5]);
-        let Some(inverse) = normal.try_inverse() else {
-            return f64::NAN;
-        };
+    /// carry one sample's worth of evidence. NaN when anything is not
+    /// finite.
+    fn noise_variance(&self) -> (f64, f64) {
         let variance = if self.weights > 0.0 {
             self.weighted_squares / self.weights
         } else {
@@ -210,7 +276,7 @@ impl PassSums {
         } else {
             1.0
         };
-        libm::sqrt(correlation * variance * inverse[(2, 2)])
+        (variance, correlation * variance)
     }
 
     fn rms(&self) -> f64 {
@@ -228,6 +294,31 @@ impl PassSums {
             f64::INFINITY
         }
     }
+}
+
+/// A point's derivative by the play where the play does not move it.
+const STILL: Point = Point { x: 0.0, z: 0.0 };
+
+/// How a pass reads one sample.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Read {
+    /// Its pose (quantizer runs interpolated) and the share of the play
+    /// its psi is read less (`super::play`).
+    Known(Pose, f64),
+    /// Not known within a quantizer's cell: left out.
+    Unread,
+    /// An isolated outlier: left out.
+    Outlier,
+}
+
+/// One Gauss-Newton step's outcome.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Step {
+    circle: Circle,
+    /// The play after the step [rad].
+    play: f64,
+    /// The standard uncertainty of the radius the pass measured [m].
+    uncertainty: f64,
 }
 
 /// Outcome of one slice of work.
@@ -262,6 +353,11 @@ pub struct Refinement {
     forearm_bias: f64,
     /// Standard uncertainty of (l2, l1) [m] from their last fits.
     uncertainty: (f64, f64),
+    /// The play in psi [rad] the upper-arm fits measure ([`super::play`]):
+    /// a falling sample's psi is read less it.
+    play: f64,
+    /// Follows psi's direction along the running upper-arm pass.
+    direction: PlayReader,
     pitch_offset: f64,
     /// Isolated outliers left out of (the forearm, the upper-arm) phase.
     outliers: (usize, usize),
@@ -306,6 +402,8 @@ impl Refinement {
             forearm_evidence: (0.0, 0.0),
             forearm_bias: 0.0,
             uncertainty: (f64::NAN, f64::NAN),
+            play: 0.0,
+            direction: PlayReader::new(),
             pitch_offset: 0.0,
             outliers: (0, 0),
             reader: Dequantizer::new(),
@@ -359,31 +457,30 @@ impl Refinement {
             if index >= path.len() {
                 return self.finish(Err(EstimateError::PathTooLong));
             }
-            let Some(pose) = self.reader.pose(path, index) else {
-                // Not known within a quantizer's cell: left out, counted once
-                // per phase in its evidence pass.
-                match self.pass {
-                    Pass::ForearmEvidence => self.unread.0 += 1,
-                    Pass::UpperArmEvidence => self.unread.1 += 1,
-                    _ => {}
+            let (pose, share) = match self.read(path, index) {
+                Read::Known(pose, share) => (pose, share),
+                left_out => {
+                    // Counted once per phase, in its evidence pass.
+                    let count = match left_out {
+                        Read::Outlier => &mut self.outliers,
+                        _ => &mut self.unread,
+                    };
+                    match self.pass {
+                        Pass::ForearmEvidence => count.0 += 1,
+                        Pass::UpperArmEvidence => count.1 += 1,
+                        _ => {}
+                    }
+                    continue;
                 }
-                continue;
             };
-            if is_isolated_outlier(path, index) {
-                // Counted once per phase, in its evidence pass.
-                match self.pass {
-                    Pass::ForearmEvidence => self.outliers.0 += 1,
-                    Pass::UpperArmEvidence => self.outliers.1 += 1,
-                    _ => {}
-                }
-                continue;
-            }
             match self.pass {
                 Pass::ForearmMoments => {
                     // A non-finite point is left out of the moments.
                     self.moments.add(pose.point());
                 }
-                Pass::Forearm(_) => self.sums.add(&self.forearm, self.scale, pose.point()),
+                Pass::Forearm(_) => self
+                    .sums
+                    .add(&self.forearm, self.scale, pose.point(), STILL),
                 Pass::ForearmEnd => {
                     let residual = pose.point().distance(self.forearm.centre) - self.forearm.radius;
                     if libm::fabs(residual) <= self.end_tolerance {
@@ -391,24 +488,26 @@ impl Refinement {
                     }
                 }
                 Pass::ForearmEvidence => {
-                    self.sums.add(&self.forearm, f64::INFINITY, pose.point());
+                    self.sums
+                        .add(&self.forearm, f64::INFINITY, pose.point(), STILL);
                     self.moments.add(pose.point());
                     self.sums.pitch_offsets += pitch_offset_at(pose, self.forearm.centre);
                 }
                 Pass::UpperArmMoments => {
-                    self.moments.add(self.elbow(pose));
+                    self.moments.add(self.elbow(pose, share).0);
                 }
                 Pass::UpperArm(_) => {
-                    let elbow = self.elbow(pose);
-                    self.sums.add(&self.upper_arm, self.scale, elbow);
+                    let (elbow, along) = self.elbow(pose, share);
+                    self.sums.add(&self.upper_arm, self.scale, elbow, along);
                 }
                 Pass::Rhythm(_) => {
-                    let elbow = self.without_rhythm(self.elbow(pose));
-                    self.sums.add(&self.rest, self.scale, elbow);
+                    let elbow = self.without_rhythm(self.elbow(pose, share).0);
+                    self.sums.add(&self.rest, self.scale, elbow, STILL);
                 }
                 Pass::UpperArmEvidence => {
-                    let elbow = self.elbow(pose);
-                    self.sums.add(&self.upper_arm, f64::INFINITY, elbow);
+                    let elbow = self.elbow(pose, share).0;
+                    self.sums.add(&self.upper_arm, f64::INFINITY, elbow, STILL);
+                    self.moments.add(elbow);
                 }
                 Pass::Done => {}
             }
@@ -422,6 +521,7 @@ impl Refinement {
                 self.pass = pass;
                 self.cursor = 0;
                 self.sums = PassSums::default();
+                self.direction = PlayReader::new();
                 Progress::Running(pass)
             }
             Err(error) => self.finish(Err(error)),
@@ -448,10 +548,10 @@ impl Refinement {
                 Pass::Forearm(0)
             }
             Pass::Forearm(iteration) => {
-                self.uncertainty.0 = self.sums.radius_uncertainty();
-                self.forearm = self
+                let step = self
                     .gauss_newton(self.forearm)
                     .map_err(EstimateError::ForearmFit)?;
+                (self.forearm, self.uncertainty.0) = (step.circle, step.uncertainty);
                 if iteration + 1 < ITERATIONS {
                     Pass::Forearm(iteration + 1)
                 } else {
@@ -476,16 +576,17 @@ impl Refinement {
             }
             Pass::UpperArmMoments => {
                 let fit = self.moments.fit().map_err(EstimateError::UpperArmFit)?;
-                self.upper_arm_kasa = fit.circle;
+                self.moments = CircleMoments::new();
                 self.upper_arm = fit.circle;
                 self.scale = f64::INFINITY;
                 Pass::UpperArm(0)
             }
             Pass::UpperArm(iteration) => {
-                self.uncertainty.1 = self.sums.radius_uncertainty();
-                self.upper_arm = self
+                let step = self
                     .gauss_newton(self.upper_arm)
                     .map_err(EstimateError::UpperArmFit)?;
+                (self.upper_arm, self.uncertainty.1) = (step.circle, step.uncertainty);
+                self.play = step.play;
                 if iteration + 1 < ITERATIONS {
                     Pass::UpperArm(iteration + 1)
                 } else {
@@ -501,10 +602,10 @@ impl Refinement {
                 }
             }
             Pass::Rhythm(iteration) => {
-                self.uncertainty.1 = self.sums.radius_uncertainty();
-                self.rest = self
+                let step = self
                     .gauss_newton(self.rest)
                     .map_err(EstimateError::UpperArmFit)?;
+                (self.rest, self.uncertainty.1) = (step.circle, step.uncertainty);
                 if iteration + 1 < ITERATIONS {
                     Pass::Rhythm(iteration + 1)
                 } else {
@@ -530,6 +631,13 @@ impl Refinement {
                 Pass::UpperArmMoments
             }
             Pass::UpperArmEvidence => {
+                // The algebraic answer over the elbow points as read with
+                // the play the fits measured.
+                self.upper_arm_kasa = self
+                    .moments
+                    .fit()
+                    .map_err(EstimateError::UpperArmFit)?
+                    .circle;
                 let estimate = self.estimate(
                     self.phase_arc(&self.upper_arm),
                     self.sums.rms(),
@@ -542,12 +650,35 @@ impl Refinement {
         })
     }
 
-    /// `circle` after the Gauss-Newton step of the pass just summed; the
+    /// How the running pass reads `path[index]`: its pose through the
+    /// quantizer reader, then the outlier test, then (an upper-arm pass)
+    /// the share of the play, whose reader follows psi's direction along
+    /// the samples that pass both (an isolated spike of psi would flip it;
+    /// the forearm phase rises: no share, `super::play`).
+    fn read(&mut self, path: &[PathSample], index: usize) -> Read {
+        let Some(pose) = self.reader.pose(path, index) else {
+            return Read::Unread;
+        };
+        if is_isolated_outlier(path, index) {
+            return Read::Outlier;
+        }
+        let share = match self.pass {
+            Pass::UpperArmMoments
+            | Pass::UpperArm(_)
+            | Pass::Rhythm(_)
+            | Pass::UpperArmEvidence => self.direction.read(path, index),
+            _ => Some(0.0),
+        };
+        share.map_or(Read::Unread, |share| Read::Known(pose, share))
+    }
+
+    /// The Gauss-Newton step of the pass just summed from `circle` and the
+    /// current play (which only the upper arm's fits take from it); the
     /// next pass's Cauchy scale from its weighted RMS residual.
-    fn gauss_newton(&mut self, circle: Circle) -> Result<Circle, CircleFitError> {
-        let next = self.sums.step(&circle)?;
+    fn gauss_newton(&mut self, circle: Circle) -> Result<Step, CircleFitError> {
+        let step = self.sums.step(&circle, self.play)?;
         self.scale = (SCALE_MULTIPLE * self.sums.weighted_rms()).max(MIN_SCALE);
-        Ok(next)
+        Ok(step)
     }
 
     fn phase_arc(&self, circle: &Circle) -> f64 {
@@ -592,6 +723,7 @@ impl Refinement {
                     upper_arm: self.uncertainty.1,
                     forearm: self.uncertainty.0,
                 }),
+                play: Some(self.play),
                 resolution: {
                     let step = self.reader.resolution();
                     step.x
@@ -626,9 +758,25 @@ impl Refinement {
         Point::new(elbow.x - angle * rx, elbow.z - angle * rz)
     }
 
-    /// The elbow of a grasp at `pose` under the refined forearm and δ.
-    fn elbow(&self, pose: Pose) -> Point {
-        elbow_from_grasp(pose, self.forearm.radius, self.pitch_offset)
+    /// The elbow of a grasp at `pose` whose psi is read less `share` ×
+    /// the play, under the refined forearm, δ and play, and its derivative
+    /// by the play [m/rad]: zero where the share is; else, from
+    /// E = G + l2 (cos e, −sin e) with e = psi − δ − s w,
+    /// s l2 (sin e, cos e) = s (G.z − E.z, E.x − G.x) (no second sine).
+    fn elbow(&self, pose: Pose, share: f64) -> (Point, Point) {
+        if share == 0.0 {
+            return (
+                elbow_from_grasp(pose, self.forearm.radius, self.pitch_offset),
+                STILL,
+            );
+        }
+        let elbow = elbow_from_grasp(
+            pose,
+            self.forearm.radius,
+            self.pitch_offset + share * self.play,
+        );
+        let along = Point::new(share * (pose.z - elbow.z), share * (elbow.x - pose.x));
+        (elbow, along)
     }
 
     fn finish(&mut self, outcome: Result<ArmEstimate, EstimateError>) -> Progress {
@@ -686,9 +834,9 @@ mod tests {
         for _ in 0..ITERATIONS {
             let mut sums = PassSums::default();
             for point in points.clone() {
-                sums.add(&circle, f64::INFINITY, point);
+                sums.add(&circle, f64::INFINITY, point, STILL);
             }
-            circle = sums.step(&circle).expect("a step");
+            circle = sums.step(&circle, 0.0).expect("a step").circle;
             let after = error(&circle);
             assert!(
                 after <= 10.0 * before * before + 1e-15,
@@ -736,18 +884,18 @@ mod tests {
             }
             let mut circle = truth;
             let mut scale = f64::INFINITY;
-            let mut last = PassSums::default();
+            let mut last = f64::NAN;
             for _ in 0..ITERATIONS {
                 let mut sums = PassSums::default();
                 for &point in &points {
-                    sums.add(&circle, scale, point);
+                    sums.add(&circle, scale, point, STILL);
                 }
-                circle = sums.step(&circle).expect("a step");
+                let step = sums.step(&circle, 0.0).expect("a step");
+                (circle, last) = (step.circle, step.uncertainty);
                 scale = (SCALE_MULTIPLE * sums.weighted_rms()).max(MIN_SCALE);
-                last = sums;
             }
             *radius_of_draw = circle.radius;
-            uncertainty += last.radius_uncertainty() / DRAWS as f64;
+            uncertainty += last / DRAWS as f64;
         }
         let mean = radii.iter().sum::<f64>() / DRAWS as f64;
         let variance =

@@ -58,6 +58,29 @@ pub struct Labelled {
     pub effect: String,
     pub l1: f64,
     pub l2: f64,
+    /// The entry as written (its `params` read by [`Labelled::parameter`]).
+    #[allow(dead_code)] // read by the tests, not by `examples/estimation_table.rs`
+    entry: String,
+}
+
+impl Labelled {
+    /// The effect's parameter `key` [SI].
+    #[allow(dead_code)] // used by the tests, not by `examples/estimation_table.rs`
+    pub fn parameter(&self, key: &str) -> f64 {
+        field(&self.entry, key).parse().expect("a number")
+    }
+}
+
+/// The value of `"key":` in a flat JSON entry, as written.
+fn field(entry: &str, key: &str) -> String {
+    let start = entry.find(&format!("\"{key}\":")).expect("key") + key.len() + 3;
+    entry[start..]
+        .split([',', '\n'])
+        .next()
+        .expect("value")
+        .trim()
+        .trim_matches('"')
+        .to_string()
 }
 
 /// The labelled effect logs (a minimal reader of the flat labels file).
@@ -67,21 +90,13 @@ pub fn labelled_effects() -> Vec<Labelled> {
         .split("\n {")
         .skip(1)
         .map(|entry| {
-            let field = |key: &str| {
-                let start = entry.find(&format!("\"{key}\":")).expect("key") + key.len() + 3;
-                entry[start..]
-                    .split([',', '\n'])
-                    .next()
-                    .expect("value")
-                    .trim()
-                    .trim_matches('"')
-                    .to_string()
-            };
+            let field = |key: &str| field(entry, key);
             Labelled {
                 file: field("file"),
                 effect: field("effect"),
                 l1: field("l1").parse().expect("l1"),
                 l2: field("l2").parse().expect("l2"),
+                entry: entry.to_string(),
             }
         })
         .collect()
