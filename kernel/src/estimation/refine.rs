@@ -162,7 +162,8 @@ struct PassSums {
 impl PassSums {
     /// Adds `point` at its residual from `circle` under Cauchy `scale`;
     /// `along` is the point's derivative by the play [m/rad] (zero but for
-    /// a falling upper-arm sample in a pass that fits the play).
+    /// an upper-arm sample read less a share of the play, in a pass that
+    /// fits it).
     fn add(&mut self, circle: &Circle, scale: f64, point: Point, along: Point) {
         let dx = point.x - circle.centre.x;
         let dz = point.z - circle.centre.z;
