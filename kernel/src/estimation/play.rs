@@ -169,23 +169,16 @@ impl PlayReader {
         };
         let first = index.saturating_add(1);
         let end = first.saturating_add(MAX_TURN).min(path.len());
-        // Read in the direction of motion (a falling psi negated, a sign
-        // flip), the switching level computed once: this loop is the
-        // reader's cost (soft-float comparisons on the Cortex-M7).
-        let falling = self.direction == Direction::Falling;
-        let onward = |psi: f64| if falling { -psi } else { psi };
-        let top = onward(extremum);
-        let back = top - HYSTERESIS;
         for (j, sample) in path.iter().enumerate().take(end).skip(first) {
-            let psi = onward(sample.pose.psi);
+            let psi = sample.pose.psi;
             // A non-finite reading decides nothing (−∞ would "switch").
             if !psi.is_finite() {
                 continue;
             }
-            if psi > top {
+            if self.beyond(psi, extremum) {
                 return (j, None);
             }
-            if psi < back {
+            if self.switches(psi, extremum) {
                 return (j, Some(sample.time));
             }
         }

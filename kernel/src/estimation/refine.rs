@@ -106,11 +106,10 @@ pub const SCALE_MULTIPLE: f64 = 3.0;
 /// Smallest Cauchy scale [m]: 3 × the position noise of `plant.md`.
 pub const MIN_SCALE: f64 = 0.3e-3;
 /// The play's prior in the upper-arm fits [m²/rad²]: no play, weighted as
-/// one sample whose point the play moves at a 0.2 m lever (a forearm's).
-/// The upper-arm phase of `plant.md`'s lift has ≈ 400 falling samples, so
-/// the prior pulls a play they measure by ≈ 0.3 %; it keeps the normal
-/// matrix invertible when no sample falls (no turn, or a pass that does
-/// not fit the play).
+/// one sample whose point the play moves at a 0.2 m lever (a forearm's),
+/// so it pulls a play that n falling samples measure by about 1/n of it;
+/// it keeps the normal matrix invertible when no sample falls (no turn,
+/// or a pass that does not fit the play).
 pub const PLAY_PRIOR: f64 = 0.04;
 /// Standard uncertainties a measured play must exceed to be read out
 /// (fewer: the path does not show it, and it is taken as none, so that a
@@ -306,7 +305,7 @@ enum Read {
     /// Its pose (quantizer runs interpolated) and the share of the play
     /// its psi is read less (`super::play`).
     Known(Pose, f64),
-    /// Not known within a quantizer's cell: left out.
+    /// Not known within a quantizer's cell (or beyond the path): left out.
     Unread,
     /// An isolated outlier: left out.
     Outlier,
