@@ -968,8 +968,12 @@ proptest! {
         let shoulder = Point::new(l2 + l1 * q1_rest.cos(), 0.02 - l1 * q1_rest.sin());
         prop_assert!((shoulder.z - 0.02 - height).abs() < 1e-12);
         let e = limb_kernel::estimation::estimate_online(&path, &ValidationLimits { shoulder_rhythm: [along, rise], ..ValidationLimits::default() }).unwrap();
-        prop_assert!((e.grasp_pitch_offset - offset).abs() < 1e-6, "{e:?}");
-        prop_assert!((e.forearm_length - l2).abs() < 1e-6, "{e:?}");
+        // Not exact: the refinement's end pass keeps the first upper-arm
+        // samples still within its 1 mm tolerance of the forearm circle
+        // (one sample 0.17 mm off left l2 5.9 µm and δ 3.1 µrad off; worst
+        // of 3 000 lifts 7.6 µm and 2.8 µrad).
+        prop_assert!((e.grasp_pitch_offset - offset).abs() < 2e-5, "{e:?}");
+        prop_assert!((e.forearm_length - l2).abs() < 2e-5, "{e:?}");
         prop_assert!((e.upper_arm_length - l1).abs() < 2e-4, "{} {l1}", e.upper_arm_length);
         prop_assert!(e.shoulder.distance(shoulder) < 5e-4, "{:?} {shoulder:?}", e.shoulder);
         // The rhythm's correction of l1 is bounded by the validator
