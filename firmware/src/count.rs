@@ -14,7 +14,7 @@
 
 use core::sync::atomic::{AtomicU32, Ordering};
 use cortex_m::peripheral::syst::SystClkSource;
-use cortex_m::peripheral::SYST;
+use cortex_m::peripheral::{SCB, SYST};
 
 /// The SysTick's reload value: the full 24 bits.
 const RELOAD: u32 = 0x00FF_FFFF;
@@ -40,13 +40,23 @@ pub fn start(mut syst: SYST) {
 }
 
 /// Ticks since [`start`].
+///
+/// The counter reloads before its exception is taken (QEMU takes
+/// interrupts between translated blocks), so a read can find it reloaded
+/// with the wrap not yet counted: the exception is then pending, and a
+/// count read near the top (reloaded, not about to wrap) adds that wrap.
+/// Without it a step that began just before a wrap and ended just after
+/// read as 2⁶⁴ − n ticks (seen: one Estimate step of the firmware
+/// session at u32::MAX instructions).
 #[inline(always)]
 pub fn now() -> u64 {
     loop {
         let before = WRAPS.load(Ordering::Relaxed);
         let current = SYST::get_current();
+        let pending = SCB::is_pendst_pending() && current > RELOAD / 2;
         if WRAPS.load(Ordering::Relaxed) == before {
-            return u64::from(before) * u64::from(RELOAD + 1) + u64::from(RELOAD - current);
+            let wraps = u64::from(before) + u64::from(pending);
+            return wraps * u64::from(RELOAD + 1) + u64::from(RELOAD - current);
         }
     }
 }
