@@ -219,3 +219,66 @@ fn req_stop_001_a_stop_wrench_obeys_limits_lowered_before_it() {
     let next = kernel.step(Some(&nan), time + PERIOD);
     assert!(next.wrench.force_magnitude() <= 5.0 + 1e-9, "{next:?}");
 }
+
+/// REQ-STOP-002: a frame the monitors refuse is not trusted. One frame of
+/// a position glitch (5 m, 1 km or 1e300 m off: beyond the workspace box)
+/// stops the kernel, and the stop holds the arm as an operator's stop at
+/// the same moment does: no larger force over its first 0.2 s (seen with
+/// the frame left in the rate window: 45 N, the force limit, against
+/// 15 N), and 2 s later the set-point within 1 mm and 1 mrad of that
+/// stop's and the arm's weight carried (seen with the frame taken into
+/// the holding pose: the set-point 0.1 m towards a 5 m glitch; the
+/// weight dropped after a 1e300 m one).
+#[test]
+fn req_stop_002_a_refused_frame_does_not_move_the_hold() {
+    let held_after = |glitch: Option<Pose>| {
+        let (mut kernel, mut time) = holding_the_lifted_arm();
+        steps(&mut kernel, &mut time, 1, LIFTED, WEIGHT);
+        match glitch {
+            Some(pose) => {
+                let command = steps(&mut kernel, &mut time, 1, pose, WEIGHT);
+                assert_eq!(command.state, StateKind::SafeStop);
+            }
+            None => {
+                kernel.request(Request::Stop, time).unwrap();
+                steps(&mut kernel, &mut time, 1, LIFTED, WEIGHT);
+            }
+        }
+        // The largest force commanded over the stop's first 0.2 s.
+        let mut peak: f64 = 0.0;
+        for _ in 0..200 {
+            let command = steps(&mut kernel, &mut time, 1, LIFTED, WEIGHT);
+            peak = peak.max(command.wrench.force_magnitude());
+        }
+        let command = steps(&mut kernel, &mut time, 1800, LIFTED, WEIGHT);
+        assert_eq!(command.stop, Some(StopCategory::Hold));
+        (command.set_point.unwrap().pose, command.wrench, peak)
+    };
+    let (pose, wrench, peak) = held_after(None);
+    assert!((wrench.fz - 6.0).abs() < 0.5, "{wrench:?}");
+    for (glitch, along) in [5.0, 1e3, 1e300]
+        .into_iter()
+        .flat_map(|g| [(g, "in x"), (g, "in z")])
+    {
+        let off = if along == "in x" {
+            Pose::new(LIFTED.x + glitch, LIFTED.z, LIFTED.psi)
+        } else {
+            Pose::new(LIFTED.x, LIFTED.z + glitch, LIFTED.psi)
+        };
+        let (p, w, most) = held_after(Some(off));
+        let case = format!("{glitch} m {along}");
+        assert!(
+            most < peak + 0.5,
+            "{case}: {most} N at the stop, not {peak} N"
+        );
+        assert!((p.psi - pose.psi).abs() < 1e-3, "{case}: {p:?}");
+        assert!(
+            p.point().distance(pose.point()) < 1e-3,
+            "{case}: held at {p:?}, not {pose:?}"
+        );
+        assert!(
+            (w.fz - wrench.fz).abs() < 0.5,
+            "{case}: {w:?}, not {wrench:?}"
+        );
+    }
+}

@@ -72,6 +72,13 @@ impl<const N: usize> RateWindow<N> {
         }
     }
 
+    /// Takes the newest frame back out (one the monitors refused: it must
+    /// not judge later rates). Frames its push let go of stay gone, so the
+    /// window may no longer span: its rates are zero until it does again.
+    pub fn retract_newest(&mut self) {
+        self.frames.pop_back();
+    }
+
     /// True when the frames span the whole window (the rates are then
     /// measured, not the zero of a window too short).
     pub fn spans(&self) -> bool {
