@@ -292,13 +292,26 @@ impl Kernel {
     }
 
     /// A step in SafeStop: the stop's set-point at `now`, its category's
-    /// wrench (a hold: the impedance law about the set-point on a finite
-    /// frame, else the wrench of the stop), and the frame, when finite and
-    /// newer, into the rate window that judges the reset.
+    /// wrench (a hold: the impedance law about the set-point on the
+    /// trusted frame, else the wrench of the stop), and the frame, when
+    /// trusted and newer, into the rate window that judges the reset.
+    ///
+    /// A frame is trusted as a running step trusts one: finite, within
+    /// the force and torque limits and inside the workspace box (the
+    /// monitors that judge a frame alone). Any other (a glitch) is passed
+    /// over: the law holds about the last trusted frame, and neither the
+    /// rate window nor the reset sees it (trusted, one frame 5 m off
+    /// commanded the 45 N force limit and let the arm's weight go).
     fn stopped_step(&mut self, stop: &SafeStop, frame: Option<&PathSample>, now: f64) -> Command {
-        let finite =
-            frame.filter(|f| f.time.is_finite() && f.pose.is_finite() && f.wrench.is_finite());
-        if let Some(frame) = finite {
+        let m = &self.monitors;
+        let trusted = frame.filter(|f| {
+            f.time.is_finite()
+                && f.pose.is_finite()
+                && f.wrench.is_finite()
+                && m.force.check(f.wrench, 0.0).is_ok()
+                && m.workspace.check(f.pose, None).is_ok()
+        });
+        if let Some(frame) = trusted {
             let newer = self.last_frame.is_none_or(|f| frame.time > f.time);
             if newer && now.is_finite() && frame.time <= now {
                 self.rates.push(*frame);
@@ -314,7 +327,8 @@ impl Kernel {
         let mut saturation = Saturation::default();
         // The stop's own wrench was commanded under the limits of its
         // time; limits updated since (allowed in SafeStop) bound it too.
-        let wrench = match (stop.category(), set_point, finite) {
+        let measured = trusted.copied().or(self.last_frame);
+        let wrench = match (stop.category(), set_point, measured) {
             (StopCategory::Hold, Some(set_point), Some(frame)) => {
                 let out = self
                     .law

@@ -282,3 +282,42 @@ fn req_stop_002_a_refused_frame_does_not_move_the_hold() {
         );
     }
 }
+
+/// REQ-STOP-002: a stopped kernel passes over a frame the monitors would
+/// refuse. Held after an operator's stop, one frame of a position glitch
+/// (5 m or 1e300 m beyond the box) changes no command by more than 0.5 N
+/// over the next 0.2 s, and the reset is then taken as without it (seen
+/// with the frame trusted: 45 N, the force limit, at the glitch's step,
+/// the weight let go, and 45 N from its rates after it).
+#[test]
+fn req_stop_002_a_stopped_kernel_passes_over_a_refused_frame() {
+    let held = |glitch: Option<f64>| {
+        let (mut kernel, mut time) = holding_the_lifted_arm();
+        steps(&mut kernel, &mut time, 1, LIFTED, WEIGHT);
+        kernel.request(Request::Stop, time).unwrap();
+        steps(&mut kernel, &mut time, 500, LIFTED, WEIGHT);
+        let mut wrenches = Vec::new();
+        if let Some(off) = glitch {
+            let pose = Pose::new(LIFTED.x + off, LIFTED.z, LIFTED.psi);
+            wrenches.push(steps(&mut kernel, &mut time, 1, pose, WEIGHT).wrench);
+        } else {
+            wrenches.push(steps(&mut kernel, &mut time, 1, LIFTED, WEIGHT).wrench);
+        }
+        for _ in 0..200 {
+            wrenches.push(steps(&mut kernel, &mut time, 1, LIFTED, WEIGHT).wrench);
+        }
+        steps(&mut kernel, &mut time, 1000, LIFTED, WEIGHT);
+        let reset = kernel.request(Request::Reset, time).map_err(|r| r.reason);
+        (wrenches, reset)
+    };
+    let (calm, reset) = held(None);
+    assert_eq!(reset, Ok(StateKind::Grasp));
+    for off in [5.0, 1e300] {
+        let (glitched, reset) = held(Some(off));
+        assert_eq!(reset, Ok(StateKind::Grasp), "{off} m");
+        for (step, (a, b)) in glitched.iter().zip(&calm).enumerate() {
+            let differ = (a.fx - b.fx).hypot(a.fz - b.fz);
+            assert!(differ < 0.5, "{off} m, step {step}: {a:?}, not {b:?}");
+        }
+    }
+}
