@@ -198,7 +198,20 @@ impl FriClient {
                 self.answer(intent)
             }
             Receipt::Done(outcome) => {
-                if let Some(silent_for) = self.silence() {
+                // A receive that timed out is a receive timeout of silence
+                // even when the socket's timer ended it early (it counts in
+                // kernel ticks and may wake up to one tick short: seen,
+                // the controller not told of a stale link).
+                let silent_for = match outcome {
+                    CycleOutcome::Stale => Some(
+                        self.last_receive
+                            .elapsed()
+                            .max(self.receive_timeout)
+                            .as_secs_f64(),
+                    ),
+                    _ => self.silence(),
+                };
+                if let Some(silent_for) = silent_for {
                     controller.on_link_stale(silent_for, self.clock());
                 }
                 Ok(outcome)
