@@ -201,35 +201,30 @@ impl Kernel {
         let Some(frame) = &latest else {
             let age = self.config.limits.max_sensor_age;
             let stale = Violation::new(Limit::StaleSensor, f64::INFINITY, age);
-            return self.stop(StopReason::Monitor(stale), now, None);
+            return self.stop(StopReason::Monitor(stale), now);
         };
         // One place where a step stops (the stop's planning is then one
         // piece of code, for readers and for the proofs alike).
         match self.running_step(frame, now) {
             Ok(command) => command,
-            Err((reason, at)) => self.stop(reason, now, at),
+            Err(reason) => self.stop(reason, now),
         }
     }
 
-    /// A step outside SafeStop: the command, or why the kernel stops and
-    /// the trusted pose of this step to stop at (none when the frame
-    /// itself is at fault).
-    fn running_step(
-        &mut self,
-        frame: &PathSample,
-        now: f64,
-    ) -> Result<Command, (StopReason, Option<Pose>)> {
+    /// A step outside SafeStop: the command, or why the kernel stops (the
+    /// stop then starts from what was trusted before: a frame the monitors
+    /// refuse is never a pose to hold, not even the session's first).
+    fn running_step(&mut self, frame: &PathSample, now: f64) -> Result<Command, StopReason> {
         let previous = self.last_frame.map(|f| f.time);
         self.monitors
             .watchdog
             .check(frame, now, previous, self.last_now)
-            .map_err(|violation| (StopReason::Monitor(violation), None))?;
+            .map_err(StopReason::Monitor)?;
         self.last_now = Some(now);
         let newer = previous.is_none_or(|t| frame.time > t);
         if newer {
             self.rates.push(*frame);
         }
-        let at = Some(frame.pose);
         let rates = self.rates.rates();
         let envelope = match self.check_monitors(frame, rates.speed(), rates.force_rate) {
             Ok(envelope) => envelope,
@@ -242,7 +237,7 @@ impl Kernel {
                 if newer {
                     self.rates.retract_newest();
                 }
-                return Err((StopReason::Monitor(violation), at));
+                return Err(StopReason::Monitor(violation));
             }
         };
         if newer {
@@ -263,11 +258,11 @@ impl Kernel {
                 (hold, CommandMode::Hold)
             }
             Ok(Plan::Stopped(stop)) => return Ok(self.stopped_step(&stop, Some(frame), now)),
-            Err(reason) => return Err((reason, at)),
+            Err(reason) => return Err(reason),
         };
         let out = self.law.command(frame.pose, rates.velocity, set_point);
         self.check_set_point(&out.set_point)
-            .map_err(|violation| (StopReason::Monitor(violation), at))?;
+            .map_err(StopReason::Monitor)?;
         let command = Command {
             state: self.state.kind(),
             mode,
@@ -277,7 +272,7 @@ impl Kernel {
             stop: None,
         };
         if !command.is_finite() || out.saturation.non_finite {
-            return Err((StopReason::NonFiniteCommand, at));
+            return Err(StopReason::NonFiniteCommand);
         }
         self.commanded = Some((out.set_point, out.wrench, mode));
         Ok(command)
@@ -398,9 +393,9 @@ impl Kernel {
         ));
     }
 
-    /// What the kernel knows when it stops at `now`, `at` the pose of a
-    /// frame the monitors judged (the frame that tripped, when it was
-    /// finite): the set-point and wrench commanded last, where the arm is
+    /// What the kernel knows when it stops at `now`, from trusted frames
+    /// only (before the first one, no pose: the stop then commands its own
+    /// wrench and holds no pose): the set-point and wrench commanded last, where the arm is
     /// held (that set-point moved by the running mean of the holding
     /// pose's offset from it, or the last frame's holding pose), the last
     /// trusted measured pose, and how a hold moves from the state it
@@ -413,7 +408,7 @@ impl Kernel {
     /// * elsewhere (the manipulation tracks its set-point closely, and may
     ///   be lowering the arm): straight to the holding pose, in at least
     ///   [`crate::stop::HOLD_MIN_TIME`] at up to the speed limit.
-    fn stop_start(&self, now: f64, at: Option<Pose>) -> StopStart {
+    fn stop_start(&self, now: f64) -> StopStart {
         let trusted = self
             .last_frame
             .filter(|f| f.pose.is_finite() && f.wrench.is_finite());
@@ -452,7 +447,7 @@ impl Kernel {
             set_point: self.commanded.map(|(s, _, _)| s),
             wrench: self.commanded.map_or(Wrench::ZERO, |(_, w, _)| w),
             holding,
-            measured: trusted.map(|f| f.pose).or(at),
+            measured: trusted.map(|f| f.pose),
             peak_speed,
             peak_rate: shaping.hold_rate,
             min_time,
@@ -507,7 +502,7 @@ impl Kernel {
             (Request::Stop, other) => Ok(State::SafeStop(stop_state(
                 other,
                 StopReason::Operator,
-                self.stop_start(now, self.last_frame.map(|f| f.pose)),
+                self.stop_start(now),
             ))),
             (Request::Reset, State::SafeStop(stop)) if !self.still_for_reset(&stop, now) => {
                 Err((State::SafeStop(stop), refuse(RefusalReason::ArmNotStill)))
@@ -708,10 +703,10 @@ impl Kernel {
     }
 
     /// Enters SafeStop for `reason` and returns the stop's first command
-    /// (`frame`, the frame of this step, gives a hold its wrench).
-    fn stop(&mut self, reason: StopReason, now: f64, at: Option<Pose>) -> Command {
+    /// (the stop's own wrench: the frame of this step does not command).
+    fn stop(&mut self, reason: StopReason, now: f64) -> Command {
         let from = self.state.kind();
-        let start = self.stop_start(now, at);
+        let start = self.stop_start(now);
         let state = self.state;
         let stop = stop_state(state, reason, start);
         self.state = State::SafeStop(stop);
@@ -937,7 +932,7 @@ mod verification {
                     // An operator's stop before any frame, as the state's
                     // answer to the request makes it (not the request
                     // itself: REQ-SM-004's proof stubs that answer).
-                    let start = kernel.stop_start(0.0, None);
+                    let start = kernel.stop_start(0.0);
                     kernel.state =
                         State::SafeStop(stop_state(kernel.state, StopReason::Operator, start));
                 }

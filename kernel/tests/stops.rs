@@ -321,3 +321,35 @@ fn req_stop_002_a_stopped_kernel_passes_over_a_refused_frame() {
         }
     }
 }
+
+/// REQ-STOP-002: a session's first frame, refused by the monitors, is no
+/// pose to hold. One frame 5 m (or 1e300 m) beyond the box, before any
+/// trusted frame, stops the kernel; the good frames after it are not
+/// pushed towards it (seen with the refused frame as the stop's fallback
+/// pose: a hold latched 5 m off, 45 N, the force limit, towards it).
+#[test]
+fn req_stop_002_a_first_frame_refused_is_no_pose_to_hold() {
+    for (off, along) in [(5.0, "x"), (5.0, "z"), (1e300, "x")] {
+        let mut kernel = Kernel::new(KernelConfig::default()).unwrap();
+        let mut time = 0.0;
+        let glitch = if along == "x" {
+            Pose::new(LIFTED.x + off, LIFTED.z, LIFTED.psi)
+        } else {
+            Pose::new(LIFTED.x, LIFTED.z + off, LIFTED.psi)
+        };
+        let first = steps(&mut kernel, &mut time, 1, glitch, WEIGHT);
+        assert_eq!(first.state, StateKind::SafeStop);
+        let mut peak: f64 = 0.0;
+        for _ in 0..2000 {
+            let command = steps(&mut kernel, &mut time, 1, LIFTED, WEIGHT);
+            peak = peak.max(command.wrench.force_magnitude());
+            if let Some(set_point) = command.set_point {
+                assert!(
+                    set_point.pose.point().distance(LIFTED.point()) < 0.1,
+                    "{off} m in {along}: held at {set_point:?}"
+                );
+            }
+        }
+        assert!(peak < 1.0, "{off} m in {along}: {peak} N");
+    }
+}
