@@ -91,6 +91,9 @@ pub struct ModelReport {
     /// The play in psi the estimator measured and read out [rad].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub play: Option<f64>,
+    /// The grasp compliance the estimator measured and read out [m/N].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub compliance: Option<f64>,
 }
 
 /// Wall time of every `Kernel::step` of the session [s].
@@ -303,6 +306,7 @@ fn model_report(model: &FittedModel, truth: &TruthReport) -> ModelReport {
         uncertainty_l1: model.uncertainty.map(|u| u.upper_arm),
         uncertainty_l2: model.uncertainty.map(|u| u.forearm),
         play: model.play,
+        compliance: model.compliance,
     }
 }
 

@@ -158,6 +158,7 @@ pub(crate) fn validated_arm() -> ValidatedArm {
             resolution: 0.0,
             uncertainty: None,
             play: None,
+            compliance: None,
         },
     };
     let accepted = validate(

@@ -409,18 +409,46 @@ impl Estimate {
                 LiftCommand::Hold(set_point) => EstimateStep::Hold(set_point),
             });
         };
+        self.conclude(path.len(), hold, reason, config)?;
+        match &mut self.stage {
+            EstimateStage::Concluding(conclusion) => {
+                conclusion.advance(path, self.grasp, &config.validation)
+            }
+            // `conclude` has just made the stage Concluding.
+            EstimateStage::Lifting(_) => Err(StopReason::EstimationFailed(
+                EstimateError::UpperArmPhaseTooShort,
+            )),
+        }
+    }
+
+    /// Ends the lift, held at `hold` for `reason`: the stage becomes the
+    /// refinement of the online estimate over a path of `path_len`
+    /// samples. A function of its own, not inlined, so that the
+    /// refinement's temporaries (1.4 kB each) live in its frame alone and
+    /// not in every Estimate step's, under the refinement's slices (with
+    /// them inlined, 200 bytes more in the refinement cost 856 bytes of
+    /// the firmware's stack).
+    ///
+    /// # Errors
+    /// The online estimate has no upper-arm phase yet.
+    #[inline(never)]
+    fn conclude(
+        &mut self,
+        path_len: usize,
+        hold: Pose,
+        reason: LiftEnd,
+        config: &KernelConfig,
+    ) -> Result<(), StopReason> {
         let refinement =
-            Refinement::after(&self.online, path.len(), config.validation.shoulder_rhythm).ok_or(
+            Refinement::after(&self.online, path_len, config.validation.shoulder_rhythm).ok_or(
                 StopReason::EstimationFailed(EstimateError::UpperArmPhaseTooShort),
             )?;
-        let mut conclusion = Conclusion {
+        self.stage = EstimateStage::Concluding(Conclusion {
             hold,
             reason,
             refinement,
-        };
-        let step = conclusion.advance(path, self.grasp, &config.validation);
-        self.stage = EstimateStage::Concluding(conclusion);
-        step
+        });
+        Ok(())
     }
 
     /// The worst case of the person's joints at `pose` under the provisional

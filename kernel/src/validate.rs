@@ -521,6 +521,7 @@ mod verification {
                     })
                 },
                 play: None,
+                compliance: None,
             },
         };
         let start = Point::new(any_or(0.0), any_or(0.0));

@@ -186,6 +186,7 @@ proptest! {
                 resolution: 0.0,
                 uncertainty: None,
                 play: None,
+                compliance: None,
             },
         };
         let limits = ValidationLimits::default();
@@ -494,7 +495,7 @@ fn noise_free_lift() -> (limb_kernel::arm::ArmGeometry, Vec<PathSample>, usize, 
 fn refined(path: &[PathSample], forearm: core::ops::Range<usize>) -> ArmEstimate {
     use limb_kernel::estimation::refine::{Progress, Refinement};
     use limb_kernel::path::PATH_CAPACITY;
-    let mut refinement = Refinement::new(forearm, path.len(), [0.0, 0.0]);
+    let mut refinement = Refinement::new(forearm, path.len(), [0.0, 0.0], 0.0);
     (0..100)
         .find_map(|_| match refinement.advance(path, PATH_CAPACITY) {
             Progress::Done(outcome) => Some(outcome.expect("refined")),
@@ -571,7 +572,7 @@ fn a_refinement_over_too_short_a_phase_is_refused_by_name() {
         })
         .collect();
     let run = |forearm: core::ops::Range<usize>, len: usize| {
-        let mut refinement = Refinement::new(forearm, len, [0.0, 0.0]);
+        let mut refinement = Refinement::new(forearm, len, [0.0, 0.0], 0.0);
         (0..100)
             .find_map(|_| match refinement.advance(&path[..len], PATH_CAPACITY) {
                 Progress::Done(outcome) => Some(outcome.map(|_| ())),

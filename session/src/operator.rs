@@ -74,6 +74,10 @@ pub struct FittedModel {
     /// (`limb_kernel::estimation::FitEvidence::play`); `None` when the
     /// method does not measure it.
     pub play: Option<f64>,
+    /// The grasp compliance the estimator measured and read out [m/N]
+    /// (`limb_kernel::estimation::FitEvidence::compliance`); `None` when
+    /// the method does not measure it.
+    pub compliance: Option<f64>,
 }
 
 impl FittedModel {
@@ -87,6 +91,7 @@ impl FittedModel {
             elbow: estimate.elbow,
             uncertainty: estimate.evidence.uncertainty,
             play: estimate.evidence.play,
+            compliance: estimate.evidence.compliance,
         }
     }
 }

@@ -88,6 +88,7 @@ fn estimate(
             resolution,
             uncertainty: None,
             play: None,
+            compliance: None,
         },
     }
 }
@@ -156,6 +157,7 @@ fn req_val_001_a_consistent_estimate_is_accepted() {
             resolution: 0.0,
             uncertainty: None,
             play: None,
+            compliance: None,
         },
     };
     assert!(validate(&e, Point::new(0.0, 0.0), &ValidationLimits::default()).is_ok());

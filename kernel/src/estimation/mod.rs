@@ -22,6 +22,7 @@
 //! largest stack object is the 1 002-byte Hough accumulator.
 
 mod circle;
+pub mod compliance;
 pub mod dequantize;
 mod geometric;
 mod grasp;
@@ -112,6 +113,10 @@ pub struct FitEvidence {
     /// of the falling samples [rad] ([`play`]); `None` for the methods
     /// other than [`Method::Online`], which do not measure it.
     pub play: Option<f64>,
+    /// The grasp's compliance 1/k the forearm phase measured and read the
+    /// grasp point with [m/N] ([`compliance`]; 0: a rigid grasp); `None`
+    /// for the methods other than [`Method::Online`].
+    pub compliance: Option<f64>,
 }
 
 /// Standard uncertainty (one standard deviation) of the fitted lengths
@@ -410,6 +415,7 @@ pub fn estimate_arm(path: &[PathSample], method: Method) -> Result<ArmEstimate, 
             resolution: 0.0,
             uncertainty: None,
             play: None,
+            compliance: None,
         },
     })
 }

@@ -10,7 +10,10 @@
 //!    ([`CircleMoments`]) [`DEPARTURE_WINDOW`] samples late, so the circle
 //!    that judges a sample never contains it, and leaves isolated outliers
 //!    out ([`super::outlier`]): an unweighted fit over a short arc follows
-//!    them out of all proportion. Once the forearm has swept
+//!    them out of all proportion, and the same samples' forearm-pose
+//!    equations to the grasp's compliance sums ([`super::compliance`]: the
+//!    refinement reads the path with the compliance they give). Once the
+//!    forearm has swept
 //!    [`PROVISIONAL_ARC`] the moments give a provisional forearm (l2, resting
 //!    elbow, 1σ uncertainties), if its radius lies in the prior's forearm
 //!    range (`ValidationLimits`; a few quantized points fit any circle). A sample whose radial residual exceeds the
@@ -38,6 +41,7 @@
 //! point: a sine and a cosine), one 3 × 3 solve and a few trigonometric
 //! functions. No loop depends on the path length.
 
+use super::compliance::{smoothed_force, ComplianceSums};
 use super::moments::{CircleMoments, MomentFit};
 use super::outlier::{is_isolated_outlier, OUTLIER_REACH};
 pub use super::phase::{
@@ -91,6 +95,7 @@ pub struct OnlineEstimator {
     lift_psi: f64,
     max_psi: f64,
     forearm_moments: CircleMoments,
+    compliance: ComplianceSums,
     forearm_added: usize,
     departures: u64,
     judged: usize,
@@ -121,6 +126,7 @@ impl OnlineEstimator {
             lift_psi: 0.0,
             max_psi: 0.0,
             forearm_moments: CircleMoments::new(),
+            compliance: ComplianceSums::new(),
             forearm_added: 0,
             departures: 0,
             judged: 0,
@@ -149,6 +155,14 @@ impl OnlineEstimator {
     /// The provisional forearm: l2 = radius, resting elbow = centre.
     pub fn forearm(&self) -> Option<&MomentFit> {
         self.forearm.as_ref()
+    }
+
+    /// The grasp's compliance [m/N] the forearm phase's samples show so
+    /// far ([`super::compliance`]; 0: a rigid grasp). The provisional fits
+    /// do not use it (their circles are checked against the raw path); the
+    /// refinement reads the whole path with it.
+    pub fn compliance(&self) -> f64 {
+        self.compliance.compliance()
     }
 
     /// The provisional grasp pitch offset δ [rad] (`crate::arm`): the
@@ -213,6 +227,9 @@ impl OnlineEstimator {
             if let Some(old) = path.get(self.forearm_added) {
                 if !is_isolated_outlier(path, self.forearm_added) {
                     self.forearm_moments.add(old.pose.point());
+                    if let Some(force) = smoothed_force(path, self.forearm_added) {
+                        self.compliance.add(old.pose, force);
+                    }
                 }
             }
             self.forearm_added += 1;

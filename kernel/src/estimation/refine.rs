@@ -7,7 +7,10 @@
 //! the refinement makes fixed passes over the recorded phases, reading
 //! each sample through [`Dequantizer`] (a quantized sensor's runs
 //! interpolated, samples not known within a cell left out: on an
-//! unquantized path, the samples as recorded):
+//! unquantized path, the samples as recorded), and each grasp point G read
+//! as G + c f_ext under the grasp's compliance c the online estimate
+//! measured over the forearm phase ([`super::compliance`]; 0 for a rigid
+//! grasp, and the samples are read as recorded):
 //! 0. one pass of Kåsa moments of the forearm phase's grasp points (the
 //!    start of step 1);
 //! 1. [`ITERATIONS`] Gauss-Newton passes of the geometric circle fit
@@ -60,7 +63,7 @@
 //! noise, on a path that is no circle (a slip, a moving shoulder) they part.
 //!
 //! # Bounds
-//! A pass costs about 60 flops, one square root and (elbow points) one
+//! A pass costs about 60 flops (two more per sample with a compliance), one square root and (elbow points) one
 //! sine and cosine per sample, the forearm's evidence and a rhythm pass
 //! one atan2 more; a call does at most `budget` samples (half
 //! of it in a rhythm pass) and one 4 × 4 inverse (the step's, whose
@@ -71,6 +74,7 @@
 //! shoulder-rhythm prior.
 
 use super::circle::{Circle, CircleFitError, ResidualBias, BIAS_BLOCK};
+use super::compliance::smoothed_force;
 use super::dequantize::Dequantizer;
 use super::moments::CircleMoments;
 use super::online::{OnlineEstimator, OnlinePhase};
@@ -323,6 +327,8 @@ struct Step {
 
 /// Outcome of one slice of work.
 #[derive(Clone, Copy, Debug, PartialEq)]
+// No heap (no_std, no alloc): the estimate (≈ 230 B) is returned inline.
+#[allow(clippy::large_enum_variant)]
 pub enum Progress {
     /// More passes to run.
     Running(Pass),
@@ -363,6 +369,10 @@ pub struct Refinement {
     outliers: (usize, usize),
     /// How every pass reads a sample's pose (quantizer runs interpolated).
     reader: Dequantizer,
+    /// The grasp's compliance [m/N] the online estimate measured over the
+    /// forearm phase ([`super::compliance`]): every pass reads the grasp
+    /// point G as G + c f_ext.
+    compliance: f64,
     /// Samples of (the forearm, the upper-arm) phase not known within a
     /// quantizer's cell ([`super::dequantize`]), left out.
     unread: (usize, usize),
@@ -377,8 +387,9 @@ impl Refinement {
     /// A refinement of the forearm phase `forearm` and the upper-arm phase
     /// from `forearm.end` to `path_len`; `rhythm` is the shoulder-rhythm
     /// prior [m/rad] (`ValidationLimits::shoulder_rhythm`; non-finite
-    /// components count as 0).
-    pub fn new(forearm: Range<usize>, path_len: usize, rhythm: [f64; 2]) -> Self {
+    /// components count as 0), `compliance` the grasp's [m/N] (non-finite:
+    /// 0).
+    pub fn new(forearm: Range<usize>, path_len: usize, rhythm: [f64; 2], compliance: f64) -> Self {
         // Every circle is set by the pass that fits it before a later pass
         // reads it: the forearm's by the first.
         let unset = Circle {
@@ -407,6 +418,11 @@ impl Refinement {
             pitch_offset: 0.0,
             outliers: (0, 0),
             reader: Dequantizer::new(),
+            compliance: if compliance.is_finite() {
+                compliance
+            } else {
+                0.0
+            },
             unread: (0, 0),
             end_tolerance: 0.0,
             last_on_circle: None,
@@ -421,7 +437,7 @@ impl Refinement {
         online.forearm()?;
         let (lift, forearm_end) = online.split();
         (online.phase() == OnlinePhase::UpperArm)
-            .then(|| Self::new(lift..forearm_end, path_len, rhythm))
+            .then(|| Self::new(lift..forearm_end, path_len, rhythm, online.compliance()))
     }
 
     /// The pass running now.
@@ -656,11 +672,20 @@ impl Refinement {
     /// the samples that pass both (an isolated spike of psi would flip it;
     /// the forearm phase rises: no share, `super::play`).
     fn read(&mut self, path: &[PathSample], index: usize) -> Read {
-        let Some(pose) = self.reader.pose(path, index) else {
+        let Some(mut pose) = self.reader.pose(path, index) else {
             return Read::Unread;
         };
         if is_isolated_outlier(path, index) {
             return Read::Outlier;
+        }
+        // The grasp point under the measured compliance (none found: the
+        // pose as read).
+        if self.compliance != 0.0 {
+            let Some(force) = smoothed_force(path, index) else {
+                return Read::Unread;
+            };
+            pose.x += self.compliance * force.x;
+            pose.z += self.compliance * force.z;
         }
         let share = match self.pass {
             Pass::UpperArmMoments
@@ -724,6 +749,7 @@ impl Refinement {
                     forearm: self.uncertainty.0,
                 }),
                 play: Some(self.play),
+                compliance: Some(self.compliance),
                 resolution: {
                     let step = self.reader.resolution();
                     step.x
