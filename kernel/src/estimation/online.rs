@@ -96,6 +96,9 @@ pub struct OnlineEstimator {
     max_psi: f64,
     forearm_moments: CircleMoments,
     compliance: ComplianceSums,
+    /// The compliance [m/N] the forearm phase measured, from the split on
+    /// (the upper arm's elbow points read the grasp with it).
+    grasp_compliance: f64,
     forearm_added: usize,
     departures: u64,
     judged: usize,
@@ -127,6 +130,7 @@ impl OnlineEstimator {
             max_psi: 0.0,
             forearm_moments: CircleMoments::new(),
             compliance: ComplianceSums::new(),
+            grasp_compliance: 0.0,
             forearm_added: 0,
             departures: 0,
             judged: 0,
@@ -158,11 +162,16 @@ impl OnlineEstimator {
     }
 
     /// The grasp's compliance [m/N] the forearm phase's samples show so
-    /// far ([`super::compliance`]; 0: a rigid grasp). The provisional fits
-    /// do not use it (their circles are checked against the raw path); the
-    /// refinement reads the whole path with it.
+    /// far, and from the split on the one they showed then
+    /// ([`super::compliance`]; 0: a rigid grasp). With one, the provisional
+    /// forearm is the forearm-pose model's, samples are judged by it, the
+    /// upper arm's elbow points read the grasp with it, and so does the
+    /// refinement.
     pub fn compliance(&self) -> f64 {
-        self.compliance.compliance()
+        match self.phase {
+            OnlinePhase::UpperArm => self.grasp_compliance,
+            _ => self.compliance.compliance(),
+        }
     }
 
     /// The provisional grasp pitch offset δ [rad] (`crate::arm`): the
@@ -242,15 +251,20 @@ impl OnlineEstimator {
             // of a sensor quantized at 4 mm fit a 0.06 m circle to a
             // 0.19 m forearm, whose envelope read the elbow at −0.62 rad
             // while it stood at +0.36 rad, and the monitor stopped.
+            // Through a compliant grasp the raw path is no circle (a
+            // 0.19 m forearm's fits 0.32 m, a softer one's none in the
+            // plausible range): the forearm-pose model with the compliance
+            // is the provisional forearm, and its δ the pitch offset.
             let plausible = prior.min_forearm_length..=prior.max_forearm_length;
-            if let Some(fit) = self
-                .forearm_moments
-                .fit()
-                .ok()
-                .filter(|fit| plausible.contains(&fit.circle.radius))
-            {
+            let (fit, pitch_offset) = match self.compliance.fit() {
+                Some(pose) => (Some(pose.moment_fit()), Some(pose.pitch_offset())),
+                None => (self.forearm_moments.fit().ok(), None),
+            };
+            if let Some(fit) = fit.filter(|fit| plausible.contains(&fit.circle.radius)) {
                 self.forearm = Some(fit);
-                if let Some(rest) = self.rest {
+                if let Some(offset) = pitch_offset {
+                    self.pitch_offset = offset;
+                } else if let Some(rest) = self.rest {
                     self.pitch_offset = pitch_offset_at(rest, fit.circle.centre);
                 }
             }
@@ -258,9 +272,19 @@ impl OnlineEstimator {
         let Some(fit) = self.forearm else {
             return;
         };
-        let tolerance = DEPARTURE_TOLERANCE.max(NOISE_MULTIPLE * fit.rms_residual);
-        let residual =
-            libm::fabs(sample.pose.point().distance(fit.circle.centre) - fit.circle.radius);
+        // Through a compliant grasp the raw path is no circle (a 0.19 m
+        // forearm's fitted 0.32 m, the elbow's lift judged against it
+        // came early or never): the sample is judged by the forearm-pose
+        // model instead, its elbow point's distance from the resting
+        // elbow. A rigid grasp keeps the circle's radial residual.
+        let (residual, rms) = match (self.compliance.fit(), smoothed_force(path, index)) {
+            (Some(pose), Some(force)) => (pose.residual(sample.pose, force), pose.rms),
+            _ => (
+                libm::fabs(sample.pose.point().distance(fit.circle.centre) - fit.circle.radius),
+                fit.rms_residual,
+            ),
+        };
+        let tolerance = DEPARTURE_TOLERANCE.max(NOISE_MULTIPLE * rms);
         // NaN counts as departed.
         let within = residual <= tolerance;
         self.departures = (self.departures << 1) | u64::from(!within);
@@ -273,6 +297,7 @@ impl OnlineEstimator {
                 .saturating_sub(DEPARTURE_WINDOW)
                 .max(self.forearm_added);
             self.phase = OnlinePhase::UpperArm;
+            self.grasp_compliance = self.compliance.compliance();
             self.upper_arm_added = self.forearm_end;
             self.catch_up(path, index);
         }
@@ -304,7 +329,15 @@ impl OnlineEstimator {
         if is_isolated_outlier(path, index) {
             return;
         }
-        let elbow = elbow_from_grasp(sample.pose, forearm.circle.radius, self.pitch_offset);
+        let mut grasp = sample.pose;
+        if self.grasp_compliance != 0.0 {
+            let Some(force) = smoothed_force(path, index) else {
+                return;
+            };
+            grasp.x += self.grasp_compliance * force.x;
+            grasp.z += self.grasp_compliance * force.z;
+        }
+        let elbow = elbow_from_grasp(grasp, forearm.circle.radius, self.pitch_offset);
         if self.upper_arm_moments.count() == 0 {
             self.first_elbow = elbow;
         }
