@@ -659,7 +659,7 @@ impl Kernel {
         match (&self.state, arm) {
             (_, Some(arm)) => joints.check(arm, frame.pose).map(|()| None),
             (State::Estimate(estimate), None) => {
-                let envelope = estimate.joint_envelope(frame.pose, &self.config.validation);
+                let envelope = estimate.joint_envelope(frame, &self.config.validation);
                 joints.check_envelope(envelope).map(|()| envelope)
             }
             _ => Ok(None),

@@ -451,11 +451,17 @@ impl Estimate {
         Ok(())
     }
 
-    /// The worst case of the person's joints at `pose` under the provisional
-    /// model and the validator's ranges `prior`; `None` before a provisional
-    /// forearm exists.
-    pub fn joint_envelope(&self, pose: Pose, prior: &ValidationLimits) -> Option<JointEnvelope> {
-        self.online.joint_envelope(pose, prior)
+    /// The worst case of the person's joints at the grasp `frame` measured
+    /// (through a compliant grasp, the grasp point its force implies)
+    /// under the provisional model and the validator's ranges `prior`;
+    /// `None` before a provisional forearm exists.
+    pub fn joint_envelope(
+        &self,
+        frame: &PathSample,
+        prior: &ValidationLimits,
+    ) -> Option<JointEnvelope> {
+        let grasp = self.online.grasp(frame.pose, frame.wrench);
+        self.online.joint_envelope(grasp, prior)
     }
 
     /// Stops.

@@ -49,7 +49,7 @@ pub use super::phase::{
 };
 use crate::arm::{elbow_from_grasp, pitch_offset_at, JointAngles};
 use crate::config::ValidationLimits;
-use crate::geometry::{angle_between, Point, Pose};
+use crate::geometry::{angle_between, Point, Pose, Wrench};
 use crate::monitor::joint_limits::JointEnvelope;
 use crate::path::PathSample;
 
@@ -96,8 +96,8 @@ pub struct OnlineEstimator {
     max_psi: f64,
     forearm_moments: CircleMoments,
     compliance: ComplianceSums,
-    /// The compliance [m/N] the forearm phase measured, from the split on
-    /// (the upper arm's elbow points read the grasp with it).
+    /// The compliance [m/N] of the provisional forearm, latched at the
+    /// split ([`Self::compliance`]).
     grasp_compliance: f64,
     forearm_added: usize,
     departures: u64,
@@ -161,17 +161,25 @@ impl OnlineEstimator {
         self.forearm.as_ref()
     }
 
-    /// The grasp's compliance [m/N] the forearm phase's samples show so
-    /// far, and from the split on the one they showed then
+    /// The grasp's compliance [m/N] the provisional forearm was fitted
+    /// with, from the split on the one the forearm phase showed
     /// ([`super::compliance`]; 0: a rigid grasp). With one, the provisional
     /// forearm is the forearm-pose model's, samples are judged by it, the
-    /// upper arm's elbow points read the grasp with it, and so does the
-    /// refinement.
+    /// upper arm's elbow points, the joint envelopes ([`Self::grasp`]) and
+    /// the refinement read the grasp with it.
     pub fn compliance(&self) -> f64 {
-        match self.phase {
-            OnlinePhase::UpperArm => self.grasp_compliance,
-            _ => self.compliance.compliance(),
+        self.grasp_compliance
+    }
+
+    /// The grasp point of a grasp measured at `pose` under external wrench
+    /// `wrench` (frame S), under [`Self::compliance`]: G + c f_ext; `pose`
+    /// itself through a rigid grasp or under a non-finite force.
+    pub fn grasp(&self, pose: Pose, wrench: Wrench) -> Pose {
+        let c = self.grasp_compliance;
+        if c == 0.0 || !(wrench.fx.is_finite() && wrench.fz.is_finite()) {
+            return pose;
         }
+        Pose::new(pose.x + c * wrench.fx, pose.z + c * wrench.fz, pose.psi)
     }
 
     /// The provisional grasp pitch offset δ [rad] (`crate::arm`): the
@@ -262,6 +270,7 @@ impl OnlineEstimator {
             };
             if let Some(fit) = fit.filter(|fit| plausible.contains(&fit.circle.radius)) {
                 self.forearm = Some(fit);
+                self.grasp_compliance = pitch_offset.map_or(0.0, |_| self.compliance.compliance());
                 if let Some(offset) = pitch_offset {
                     self.pitch_offset = offset;
                 } else if let Some(rest) = self.rest {
@@ -400,12 +409,17 @@ impl OnlineEstimator {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::Wrench;
 
     /// A forearm of `radius` turning from rest about its resting elbow at
     /// 1 kHz (psi 0 → 0.6 rad in 1.2 s after 0.1 s at rest), recorded
     /// sample by sample under `prior`.
     fn forearm_turn(radius: f64, prior: &ValidationLimits) -> OnlineEstimator {
+        cuffed_forearm_turn(radius, 0.0, prior)
+    }
+
+    /// As [`forearm_turn`], the grasp measured through a cuff of
+    /// compliance `c` [m/N] under a force that falls as the forearm rises.
+    fn cuffed_forearm_turn(radius: f64, c: f64, prior: &ValidationLimits) -> OnlineEstimator {
         let mut path = [PathSample::default(); 1300];
         let mut online = OnlineEstimator::new();
         for (k, sample) in path.iter_mut().enumerate() {
@@ -413,11 +427,11 @@ mod tests {
             *sample = PathSample {
                 time: k as f64 * 1e-3,
                 pose: Pose::new(
-                    radius - radius * libm::cos(psi),
-                    radius * libm::sin(psi),
+                    radius - radius * libm::cos(psi) + c * 0.5 * libm::sin(psi),
+                    radius * libm::sin(psi) - c * 6.0 * libm::cos(psi),
                     psi,
                 ),
-                wrench: Wrench::ZERO,
+                wrench: Wrench::new(-0.5 * libm::sin(psi), 6.0 * libm::cos(psi), 0.0),
             };
         }
         for end in 1..=path.len() {
@@ -444,5 +458,27 @@ mod tests {
         let plausible = forearm_turn(0.20, &default);
         let fit = plausible.forearm().expect("a provisional forearm");
         assert!((fit.circle.radius - 0.20).abs() < 1e-6, "{fit:?}");
+    }
+
+    /// REQ-EST-010: through a cuff of 700 N/m the provisional forearm is
+    /// the forearm-pose model's (l2 within 1 mm; the raw path's circle is
+    /// not the forearm), its compliance is measured, and a grasp is read
+    /// as G + c f_ext; through a rigid grasp the compliance is 0 and a
+    /// grasp is read as measured (the same bits).
+    #[test]
+    fn req_est_010_a_cuffed_forearm_is_the_pose_model_s() {
+        let prior = ValidationLimits::default();
+        let cuffed = cuffed_forearm_turn(0.19, 1.0 / 700.0, &prior);
+        let forearm = cuffed.forearm().expect("a provisional forearm");
+        assert!((forearm.circle.radius - 0.19).abs() < 1e-3, "{forearm:?}");
+        assert!((cuffed.compliance() * 700.0 - 1.0).abs() < 0.03);
+        let pose = Pose::new(0.1, 0.05, 0.3);
+        let wrench = Wrench::new(1.0, -5.0, 0.0);
+        let read = cuffed.grasp(pose, wrench);
+        let c = cuffed.compliance();
+        assert_eq!(read, Pose::new(0.1 + c, 0.05 - 5.0 * c, 0.3));
+        let rigid = forearm_turn(0.19, &prior);
+        assert_eq!(rigid.compliance(), 0.0);
+        assert_eq!(rigid.grasp(pose, wrench), pose);
     }
 }
