@@ -97,7 +97,7 @@ pub const ITERATIONS: usize = 5;
 /// until the play in psi was read (REQ-EST-009: its 4 × 4 solve, the
 /// direction's reader and its look ahead made the worst slice of 16
 /// 334 800 instructions, over the 300 000 budget); 12 keep it at
-/// 259 320 (≈ 0.43 ms). On the host a slice is ≈ 1 µs (`cargo bench -p
+/// 259 320 (≈ 0.43 ms; 260 040 since the grasp's compliance, REQ-EST-010). On the host a slice is ≈ 1 µs (`cargo bench -p
 /// limb-verification --bench step`); a refinement is ≈ 950 slices
 /// (≈ 1 s at 1 kHz).
 pub const SAMPLES_PER_STEP: usize = 12;
