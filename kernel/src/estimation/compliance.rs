@@ -78,6 +78,17 @@ pub fn smoothed_force(path: &[PathSample], index: usize) -> Option<Point> {
     Some(Point::new(x / n, z / n))
 }
 
+/// The grasp point G + c f_ext [m] of a grasp measured at `pose` through a
+/// cuff of compliance `compliance` [m/N] under force `force` (f_ext.x,
+/// f_ext.z) [N], frame S; psi as measured.
+pub fn grasp_point(pose: Pose, compliance: f64, force: Point) -> Pose {
+    Pose::new(
+        pose.x + compliance * force.x,
+        pose.z + compliance * force.z,
+        pose.psi,
+    )
+}
+
 /// Unknowns of the forearm-pose model.
 const N: usize = 5;
 
@@ -137,8 +148,10 @@ impl ComplianceSums {
     }
 
     /// The compliance c [m/N] to read the samples with: that of
-    /// [`Self::fit`], else 0 (a rigid grasp).
-    pub fn compliance(&self) -> f64 {
+    /// [`Self::fit`], else 0 (a rigid grasp). The kernel reads it from the
+    /// fit it solves anyway (`online.rs`); the tests from here.
+    #[cfg(test)]
+    fn compliance(&self) -> f64 {
         self.fit().map_or(0.0, |fit| fit.compliance)
     }
 
@@ -191,7 +204,8 @@ impl ComplianceSums {
 
     /// The upper-triangular Cholesky factor R of AᵀA = RᵀR, packed as
     /// `normal`; `None` when AᵀA is not positive definite (or not finite).
-    /// In place of a matrix library's: 120 bytes of stack, not 800.
+    /// On the packed triangle itself: its leading 4 × 4 block is the rigid
+    /// grasp's factor, so one factorisation serves both fits.
     fn factor(&self) -> Option<[f64; 15]> {
         let mut r = [0.0; 15];
         for i in 0..N {
@@ -311,9 +325,10 @@ impl PoseFit {
     /// force `force` (f_ext.x, f_ext.z) implies: how far that sample is
     /// from a forearm turning about the resting elbow.
     pub fn residual(&self, pose: Pose, force: Point) -> f64 {
+        let grasp = grasp_point(pose, self.compliance, force);
         let (sin, cos) = (libm::sin(pose.psi), libm::cos(pose.psi));
-        let x = pose.x + self.compliance * force.x + self.along * cos + self.across * sin;
-        let z = pose.z + self.compliance * force.z - self.along * sin + self.across * cos;
+        let x = grasp.x + self.along * cos + self.across * sin;
+        let z = grasp.z - self.along * sin + self.across * cos;
         libm::hypot(x - self.elbow.x, z - self.elbow.z)
     }
 }

@@ -39,9 +39,12 @@
 //! # Bounds
 //! Per call: at most [`CATCH_UP_PER_SAMPLE`] moment updates (each one elbow
 //! point: a sine and a cosine), one 3 × 3 solve and a few trigonometric
-//! functions. No loop depends on the path length.
+//! functions; in the forearm phase, the compliance sums' update (an
+//! 11-sample force mean, a sine and a cosine) and, once a provisional
+//! forearm is due, one 5 × 5 Cholesky factorisation with its solves and
+//! inverse. No loop depends on the path length.
 
-use super::compliance::{smoothed_force, ComplianceSums};
+use super::compliance::{grasp_point, smoothed_force, ComplianceSums, PoseFit};
 use super::moments::{CircleMoments, MomentFit};
 use super::outlier::{is_isolated_outlier, OUTLIER_REACH};
 pub use super::phase::{
@@ -179,7 +182,7 @@ impl OnlineEstimator {
         if c == 0.0 || !(wrench.fx.is_finite() && wrench.fz.is_finite()) {
             return pose;
         }
-        Pose::new(pose.x + c * wrench.fx, pose.z + c * wrench.fz, pose.psi)
+        grasp_point(pose, c, Point::new(wrench.fx, wrench.fz))
     }
 
     /// The provisional grasp pitch offset δ [rad] (`crate::arm`): the
@@ -252,7 +255,15 @@ impl OnlineEstimator {
             self.forearm_added += 1;
         }
         let swept = self.max_psi - self.lift_psi >= PROVISIONAL_ARC;
-        if swept && self.forearm_moments.count() >= PROVISIONAL_SAMPLES {
+        let provisional = swept && self.forearm_moments.count() >= PROVISIONAL_SAMPLES;
+        // The forearm-pose model of the sums as they now are, solved once
+        // for this sample, and only when something reads it.
+        let pose_fit: Option<PoseFit> = if provisional || self.forearm.is_some() {
+            self.compliance.fit()
+        } else {
+            None
+        };
+        if provisional {
             // A forearm outside the plausible range is no provisional
             // forearm yet: the set-point stays within the prior reach, and
             // no joint envelope is built on it. Seen: 18 distinct points
@@ -264,15 +275,15 @@ impl OnlineEstimator {
             // plausible range): the forearm-pose model with the compliance
             // is the provisional forearm, and its δ the pitch offset.
             let plausible = prior.min_forearm_length..=prior.max_forearm_length;
-            let (fit, pitch_offset) = match self.compliance.fit() {
-                Some(pose) => (Some(pose.moment_fit()), Some(pose.pitch_offset())),
-                None => (self.forearm_moments.fit().ok(), None),
+            let fit = match pose_fit {
+                Some(pose) => Some(pose.moment_fit()),
+                None => self.forearm_moments.fit().ok(),
             };
             if let Some(fit) = fit.filter(|fit| plausible.contains(&fit.circle.radius)) {
                 self.forearm = Some(fit);
-                self.grasp_compliance = pitch_offset.map_or(0.0, |_| self.compliance.compliance());
-                if let Some(offset) = pitch_offset {
-                    self.pitch_offset = offset;
+                self.grasp_compliance = pose_fit.map_or(0.0, |pose| pose.compliance);
+                if let Some(pose) = pose_fit {
+                    self.pitch_offset = pose.pitch_offset();
                 } else if let Some(rest) = self.rest {
                     self.pitch_offset = pitch_offset_at(rest, fit.circle.centre);
                 }
@@ -286,13 +297,15 @@ impl OnlineEstimator {
         // came early or never): the sample is judged by the forearm-pose
         // model instead, its elbow point's distance from the resting
         // elbow. A rigid grasp keeps the circle's radial residual.
-        let (residual, rms) = match (self.compliance.fit(), smoothed_force(path, index)) {
-            (Some(pose), Some(force)) => (pose.residual(sample.pose, force), pose.rms),
-            _ => (
+        let by_pose = pose_fit.and_then(|pose| {
+            smoothed_force(path, index).map(|force| (pose.residual(sample.pose, force), pose.rms))
+        });
+        let (residual, rms) = by_pose.unwrap_or_else(|| {
+            (
                 libm::fabs(sample.pose.point().distance(fit.circle.centre) - fit.circle.radius),
                 fit.rms_residual,
-            ),
-        };
+            )
+        });
         let tolerance = DEPARTURE_TOLERANCE.max(NOISE_MULTIPLE * rms);
         // NaN counts as departed.
         let within = residual <= tolerance;
@@ -306,7 +319,7 @@ impl OnlineEstimator {
                 .saturating_sub(DEPARTURE_WINDOW)
                 .max(self.forearm_added);
             self.phase = OnlinePhase::UpperArm;
-            self.grasp_compliance = self.compliance.compliance();
+            self.grasp_compliance = pose_fit.map_or(0.0, |pose| pose.compliance);
             self.upper_arm_added = self.forearm_end;
             self.catch_up(path, index);
         }
@@ -343,8 +356,7 @@ impl OnlineEstimator {
             let Some(force) = smoothed_force(path, index) else {
                 return;
             };
-            grasp.x += self.grasp_compliance * force.x;
-            grasp.z += self.grasp_compliance * force.z;
+            grasp = grasp_point(grasp, self.grasp_compliance, force);
         }
         let elbow = elbow_from_grasp(grasp, forearm.circle.radius, self.pitch_offset);
         if self.upper_arm_moments.count() == 0 {

@@ -74,7 +74,7 @@
 //! shoulder-rhythm prior.
 
 use super::circle::{Circle, CircleFitError, ResidualBias, BIAS_BLOCK};
-use super::compliance::smoothed_force;
+use super::compliance::{grasp_point, smoothed_force};
 use super::dequantize::Dequantizer;
 use super::moments::CircleMoments;
 use super::online::{OnlineEstimator, OnlinePhase};
@@ -684,8 +684,7 @@ impl Refinement {
             let Some(force) = smoothed_force(path, index) else {
                 return Read::Unread;
             };
-            pose.x += self.compliance * force.x;
-            pose.z += self.compliance * force.z;
+            pose = grasp_point(pose, self.compliance, force);
         }
         let share = match self.pass {
             Pass::UpperArmMoments
