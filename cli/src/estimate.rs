@@ -5,11 +5,13 @@
 use crate::arm_model::ArmModel;
 use crate::error::{emit, print_json, CliError};
 use limb_kernel::estimation::outlier::OUTLIER_WINDOW;
+use limb_kernel::estimation::tilt::PlaneTilt;
 use limb_kernel::estimation::{estimate_arm, estimate_online, FitEvidence, Method};
 use limb_kernel::geometry::Point;
 use limb_kernel::path::{is_due, PathSample, PATH_CAPACITY};
 use limb_kernel::validate::validate;
 use limb_kernel::KernelConfig;
+use limb_sim::log::Record;
 use std::path::Path;
 
 /// The estimator to run (`--method`).
@@ -69,7 +71,7 @@ struct EstimateReport {
 /// the kernel's path buffer, or a log the estimator cannot fit.
 pub fn run(log: &Path, method: MethodArg, arm: ArmModel, json: bool) -> Result<(), CliError> {
     let records = crate::session_log::read_records(log)?;
-    let path = at_path_rate(records.iter().map(limb_sim::log::Record::path_sample));
+    let (path, tilt) = at_path_rate(&records);
     if path.len() > PATH_CAPACITY {
         return Err(CliError::BadInput(format!(
             "{}: {} samples, more than the estimator's capacity of {PATH_CAPACITY}",
@@ -79,7 +81,7 @@ pub fn run(log: &Path, method: MethodArg, arm: ArmModel, json: bool) -> Result<(
     }
     let limits = arm.apply(KernelConfig::default()).validation;
     let estimated = match method {
-        MethodArg::Online => estimate_online(&path, &limits),
+        MethodArg::Online => estimate_online(&path, &limits, &tilt),
         _ => estimate_arm(&path, method.into()),
     };
     let estimate = estimated.map_err(|error| {
@@ -155,13 +157,18 @@ fn grasp_at_rest(path: &[PathSample]) -> Point {
 
 /// The samples the kernel would record from a log: at most one per
 /// [`PATH_SAMPLE_PERIOD`] (a `limb run --log` session is logged at the
-/// kernel's 1 kHz; `plant.md` logs are already at 100 Hz and pass whole).
-fn at_path_rate(samples: impl Iterator<Item = PathSample>) -> Vec<PathSample> {
+/// kernel's 1 kHz; `plant.md` logs are already at 100 Hz and pass whole),
+/// recorded as the kernel records them, in the arm's plane their lateral
+/// positions show (a log without the lateral column: a vertical one), and
+/// that plane's tilt.
+fn at_path_rate(records: &[Record]) -> (Vec<PathSample>, PlaneTilt) {
     let mut path: Vec<PathSample> = Vec::new();
-    for sample in samples {
+    let mut tilt = PlaneTilt::new();
+    for record in records {
+        let sample = record.path_sample();
         if is_due(path.last(), sample.time) {
-            path.push(sample);
+            path.push(tilt.record(&sample, record.lateral.unwrap_or(0.0)));
         }
     }
-    path
+    (path, tilt)
 }

@@ -94,6 +94,9 @@ pub struct ModelReport {
     /// The grasp compliance the estimator measured and read out [m/N].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub compliance: Option<f64>,
+    /// The tilt of the arm's plane the estimator read the heights in [rad].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub plane_tilt: Option<f64>,
 }
 
 /// Wall time of every `Kernel::step` of the session [s].
@@ -307,6 +310,7 @@ fn model_report(model: &FittedModel, truth: &TruthReport) -> ModelReport {
         uncertainty_l2: model.uncertainty.map(|u| u.forearm),
         play: model.play,
         compliance: model.compliance,
+        plane_tilt: model.plane_tilt,
     }
 }
 

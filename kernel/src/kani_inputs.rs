@@ -159,6 +159,7 @@ pub(crate) fn validated_arm() -> ValidatedArm {
             uncertainty: None,
             play: None,
             compliance: None,
+            plane_tilt: None,
         },
     };
     let accepted = validate(

@@ -68,6 +68,8 @@ pub struct Kernel {
     /// The newest frame the adapter gave, trusted or not: a step without
     /// a frame (silence) judges it again at its own time.
     latest: Option<PathSample>,
+    /// The lateral position y of `latest` [m, frame S] (0 before any).
+    latest_lateral: f64,
     last_now: Option<f64>,
     /// The set-point and wrench of the last command before any stop.
     commanded: Option<(SetPoint, Wrench, CommandMode)>,
@@ -146,6 +148,7 @@ impl Kernel {
             path: GraspPath::new(),
             last_frame: None,
             latest: None,
+            latest_lateral: 0.0,
             last_now: None,
             commanded: None,
             stop_clock: f64::NAN,
@@ -189,10 +192,32 @@ impl Kernel {
     /// once (the age infinite). Never panics; any fault becomes a safe
     /// stop in this same step.
     ///
+    /// A frame's lateral position is taken as 0 (a robot that moves only
+    /// in S's sagittal plane, or does not measure it):
+    /// [`Self::step_with_lateral`].
+    ///
     /// [`Limit::StaleSensor`]: crate::monitor::Limit::StaleSensor
     pub fn step(&mut self, frame: Option<&PathSample>, now: f64) -> Command {
+        self.step_with_lateral(frame, 0.0, now)
+    }
+
+    /// [`Self::step`] on a `frame` whose grasp the robot measured at
+    /// lateral position `lateral` (y of frame S [m]; ignored without a
+    /// frame). The lateral position is read only by Estimate, for the
+    /// tilt of the arm's plane (REQ-EST-011); a non-finite one is a
+    /// non-finite sensor value and stops a running kernel
+    /// ([`Limit::NonFiniteSensor`]).
+    ///
+    /// [`Limit::NonFiniteSensor`]: crate::monitor::Limit::NonFiniteSensor
+    pub fn step_with_lateral(
+        &mut self,
+        frame: Option<&PathSample>,
+        lateral: f64,
+        now: f64,
+    ) -> Command {
         if let Some(frame) = frame {
             self.latest = Some(*frame);
+            self.latest_lateral = lateral;
         }
         let latest = self.latest;
         if let State::SafeStop(stop) = self.state {
@@ -220,6 +245,10 @@ impl Kernel {
             .watchdog
             .check(frame, now, previous, self.last_now)
             .map_err(StopReason::Monitor)?;
+        if !self.latest_lateral.is_finite() {
+            let faulty = Violation::new(Limit::NonFiniteSensor, f64::NAN, f64::NAN);
+            return Err(StopReason::Monitor(faulty));
+        }
         self.last_now = Some(now);
         let newer = previous.is_none_or(|t| frame.time > t);
         if newer {
@@ -686,7 +715,14 @@ impl Kernel {
             State::SafeStop(stop) => Plan::Stopped(*stop),
             State::Estimate(estimate) => {
                 let lifting = estimate.lift_ended().is_none();
-                let step = estimate.advance(&mut self.path, frame, now, envelope, &self.config)?;
+                let step = estimate.advance(
+                    &mut self.path,
+                    frame,
+                    self.latest_lateral,
+                    now,
+                    envelope,
+                    &self.config,
+                )?;
                 if let Some(reason) = estimate.lift_ended().filter(|_| lifting) {
                     self.trace.record(TraceEvent {
                         time: now,

@@ -12,7 +12,8 @@
 //!                                                                 │ violation → SafeStop
 //!                                                                 ▼
 //!        state (Grasp │ Estimate │ Validated │ Manipulate │ SafeStop) ─▶ set-point
-//!          Estimate: sample ─▶ path + estimation::online (O(1)) ─▶ provisional arm
+//!          Estimate: sample ─▶ estimation::tilt (in the arm's plane)
+//!                      ─▶ path + estimation::online (O(1)) ─▶ provisional arm
 //!                      ─▶ joint envelope ─▶ monitor::joint_limits + lift (shaped, ended)
 //!                    held: estimation::refine (≤ SAMPLES_PER_STEP per step)
 //!                      ─▶ validate ─▶ ValidatedArm                (motion)

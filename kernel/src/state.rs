@@ -32,6 +32,7 @@ use crate::config::ValidationLimits;
 use crate::config::{ConfigError, KernelConfig};
 use crate::estimation::online::OnlineEstimator;
 use crate::estimation::refine::{Progress, Refinement, SAMPLES_PER_STEP};
+use crate::estimation::tilt::PlaneTilt;
 use crate::estimation::EstimateError;
 use crate::geometry::{Pose, Wrench};
 use crate::lift::{LiftCommand, LiftEnd, LiftSettings, ShapedLift};
@@ -96,6 +97,9 @@ pub struct Estimate {
     /// The grasp pose the motion started from (frame S).
     grasp: Pose,
     online: OnlineEstimator,
+    /// The tilt of the arm's plane, from the recorded samples' lateral
+    /// positions (REQ-EST-011).
+    tilt: PlaneTilt,
     stage: EstimateStage,
 }
 
@@ -324,6 +328,7 @@ impl Grasp {
             Ok(motion) => Ok(Estimate {
                 grasp,
                 online: OnlineEstimator::new(),
+                tilt: PlaneTilt::new(),
                 stage: EstimateStage::Lifting(ShapedLift::new(motion, now)),
             }),
             Err(error) => Err((self, error)),
@@ -366,9 +371,11 @@ impl Estimate {
         &self.online
     }
 
-    /// One step at kernel time `now` with measured `frame`: while lifting,
-    /// records the sample into `path` and the online estimate when one is
-    /// due (at most one per [`PATH_SAMPLE_PERIOD`]) and shapes the lift;
+    /// One step at kernel time `now` with measured `frame` and its lateral
+    /// position `lateral` [m, frame S]: while lifting, records the sample
+    /// in the arm's plane ([`PlaneTilt::record`]) into `path` and the
+    /// online estimate when one is due (at most one per
+    /// [`PATH_SAMPLE_PERIOD`]) and shapes the lift;
     /// once the lift has settled, concludes: one slice of the refinement
     /// per step and, on the step it finishes, the validator (the only way
     /// into [`Validated`], held where the lift ended). O(1) work: one
@@ -384,6 +391,7 @@ impl Estimate {
         &mut self,
         path: &mut GraspPath,
         frame: &PathSample,
+        lateral: f64,
         now: f64,
         judged: Option<JointEnvelope>,
         config: &KernelConfig,
@@ -396,7 +404,8 @@ impl Estimate {
         };
         let mut judged = Some(judged);
         if is_due(path.last(), frame.time) {
-            path.push(*frame).map_err(|_| StopReason::PathBufferFull)?;
+            path.push(self.tilt.record(frame, lateral))
+                .map_err(|_| StopReason::PathBufferFull)?;
             self.online.record(path, &config.validation);
             judged = None;
         }
@@ -439,10 +448,15 @@ impl Estimate {
         reason: LiftEnd,
         config: &KernelConfig,
     ) -> Result<(), StopReason> {
-        let refinement =
-            Refinement::after(&self.online, path_len, config.validation.shoulder_rhythm).ok_or(
-                StopReason::EstimationFailed(EstimateError::UpperArmPhaseTooShort),
-            )?;
+        let refinement = Refinement::after(
+            &self.online,
+            path_len,
+            config.validation.shoulder_rhythm,
+            &self.tilt,
+        )
+        .ok_or(StopReason::EstimationFailed(
+            EstimateError::UpperArmPhaseTooShort,
+        ))?;
         self.stage = EstimateStage::Concluding(Conclusion {
             hold,
             reason,

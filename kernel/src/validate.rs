@@ -522,6 +522,7 @@ mod verification {
                 },
                 play: None,
                 compliance: None,
+                plane_tilt: None,
             },
         };
         let start = Point::new(any_or(0.0), any_or(0.0));

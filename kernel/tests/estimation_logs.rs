@@ -204,7 +204,8 @@ fn auto_is_never_worse_than_kasa_and_corrects_compliance_and_slip() {
 fn online_estimate_is_accurate_on_the_six_noisy_logs() {
     for case in 1..=6 {
         let log = logs::read(&format!("noisy/case{case}.csv"));
-        let estimate = estimate_online(&log.path, &ValidationLimits::default()).expect("estimate");
+        let estimate =
+            estimate_online(&log.path, &ValidationLimits::default(), &log.tilt).expect("estimate");
         let errors = noisy_errors(case, "online", &estimate, &log);
         assert_within(
             errors,
@@ -222,7 +223,8 @@ fn online_on_labelled(effect: &str) -> (logs::Labelled, logs::Log, ArmEstimate, 
         .find(|l| l.effect == effect)
         .expect("the labelled log");
     let log = logs::read(&format!("effects/{}", labelled.file));
-    let estimate = estimate_online(&log.path, &ValidationLimits::default()).expect("estimate");
+    let estimate =
+        estimate_online(&log.path, &ValidationLimits::default(), &log.tilt).expect("estimate");
     let off = [
         (estimate.upper_arm_length - labelled.l1).abs(),
         (estimate.forearm_length - labelled.l2).abs(),
@@ -254,13 +256,44 @@ fn req_est_007_a_quantized_log_is_estimated_and_validated() {
     assert!(validate(&estimate, start, &ValidationLimits::default()).is_ok());
     for case in 1..=6 {
         let log = logs::read(&format!("noisy/case{case}.csv"));
-        let estimate = estimate_online(&log.path, &ValidationLimits::default()).expect("estimate");
+        let estimate =
+            estimate_online(&log.path, &ValidationLimits::default(), &log.tilt).expect("estimate");
         assert!(
             estimate.evidence.resolution == 0.0,
             "case {case}: {:?}",
             estimate.evidence
         );
     }
+}
+
+/// REQ-EST-011: the labelled plane-tilt log (the arm's plane tilted by
+/// 11.4° about x, written by an independent implementation) is recorded
+/// in its plane: the online estimate is validated with l1 and l2 within
+/// the measured 0.002 / 0.04 mm plus [`MARGIN`] and reports the tilt
+/// within 0.1 mrad. Seen failing read in S alone (the lateral column left
+/// out, by hand): refused, `shoulder_off_table` 3.4 mm, l1 and l2 2.6 and
+/// 2.7 mm short; scaled in the refinement alone, the same (the online
+/// split was the ellipse's).
+#[test]
+fn req_est_011_the_shared_tilted_log_is_read_in_its_plane() {
+    let (labelled, log, estimate, off) = online_on_labelled("plane_tilt");
+    let tilt = estimate
+        .evidence
+        .plane_tilt
+        .expect("the online method reads it");
+    println!(
+        "plane_tilt: {:.3?} mm, tilt {tilt:.5} of {:.5} rad",
+        off.map(|e| e * 1e3),
+        labelled.parameter("angle")
+    );
+    let start = log.path[0].pose.point();
+    let verdict = validate(&estimate, start, &ValidationLimits::default());
+    assert!(verdict.is_ok(), "{verdict:?}");
+    assert!(
+        off[0] <= 0.002e-3 + MARGIN && off[1] <= 0.04e-3 + MARGIN,
+        "{off:?}"
+    );
+    assert!((tilt - labelled.parameter("angle")).abs() <= 1e-4);
 }
 
 /// REQ-EST-009: on the labelled backlash log (play of 26.1 mrad in psi,
@@ -296,7 +329,8 @@ fn req_est_009_the_play_in_psi_is_measured_and_read_out() {
     assert!((play - width).abs() <= 3e-3, "play {play} of {width}");
     for case in 1..=6 {
         let log = logs::read(&format!("noisy/case{case}.csv"));
-        let estimate = estimate_online(&log.path, &ValidationLimits::default()).expect("estimate");
+        let estimate =
+            estimate_online(&log.path, &ValidationLimits::default(), &log.tilt).expect("estimate");
         let play = estimate.evidence.play.expect("measured");
         assert_eq!(play, 0.0, "case {case}");
     }
@@ -319,7 +353,7 @@ fn req_time_002_the_refinement_runs_in_bounded_slices() {
     let samples = ITERATIONS * forearm + (ITERATIONS + 1) * upper_arm + forearm + upper_arm;
     let run = |budget: usize| -> (usize, ArmEstimate) {
         let mut refinement =
-            Refinement::after(&online, log.path.len(), [0.0, 0.0]).expect("split found");
+            Refinement::after(&online, log.path.len(), [0.0, 0.0], &log.tilt).expect("split found");
         for calls in 1..=samples {
             if let Progress::Done(outcome) = refinement.advance(&log.path, budget) {
                 return (calls, outcome.expect("refined"));

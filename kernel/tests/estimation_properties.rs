@@ -1,6 +1,7 @@
 //! Property tests of the estimators and the validator.
 
 use limb_kernel::config::ValidationLimits;
+use limb_kernel::estimation::tilt::PlaneTilt;
 use limb_kernel::estimation::{
     estimate_arm, fit_circle_geometric, fit_circle_kasa, fit_circle_taubin, hough_circle_chords,
     hough_circle_normals, ArmEstimate, Circle, CircleFitError, FitEvidence, GraspCorrection,
@@ -187,6 +188,7 @@ proptest! {
                 uncertainty: None,
                 play: None,
                 compliance: None,
+                plane_tilt: None,
             },
         };
         let limits = ValidationLimits::default();
@@ -495,7 +497,7 @@ fn noise_free_lift() -> (limb_kernel::arm::ArmGeometry, Vec<PathSample>, usize, 
 fn refined(path: &[PathSample], forearm: core::ops::Range<usize>) -> ArmEstimate {
     use limb_kernel::estimation::refine::{Progress, Refinement};
     use limb_kernel::path::PATH_CAPACITY;
-    let mut refinement = Refinement::new(forearm, path.len(), [0.0, 0.0], 0.0);
+    let mut refinement = Refinement::new(forearm, path.len(), [0.0, 0.0], 0.0, 1.0);
     (0..100)
         .find_map(|_| match refinement.advance(path, PATH_CAPACITY) {
             Progress::Done(outcome) => Some(outcome.expect("refined")),
@@ -572,7 +574,7 @@ fn a_refinement_over_too_short_a_phase_is_refused_by_name() {
         })
         .collect();
     let run = |forearm: core::ops::Range<usize>, len: usize| {
-        let mut refinement = Refinement::new(forearm, len, [0.0, 0.0], 0.0);
+        let mut refinement = Refinement::new(forearm, len, [0.0, 0.0], 0.0, 1.0);
         (0..100)
             .find_map(|_| match refinement.advance(&path[..len], PATH_CAPACITY) {
                 Progress::Done(outcome) => Some(outcome.map(|_| ())),
@@ -968,7 +970,7 @@ proptest! {
         let q1_rest = -(height / l1).asin();
         let shoulder = Point::new(l2 + l1 * q1_rest.cos(), 0.02 - l1 * q1_rest.sin());
         prop_assert!((shoulder.z - 0.02 - height).abs() < 1e-12);
-        let e = limb_kernel::estimation::estimate_online(&path, &ValidationLimits { shoulder_rhythm: [along, rise], ..ValidationLimits::default() }).unwrap();
+        let e = limb_kernel::estimation::estimate_online(&path, &ValidationLimits { shoulder_rhythm: [along, rise], ..ValidationLimits::default() }, &PlaneTilt::new()).unwrap();
         // Not exact: the refinement's end pass keeps the first upper-arm
         // samples still within its 1 mm tolerance of the forearm circle
         // (one sample 0.17 mm off left l2 5.9 µm and δ 3.1 µrad off; worst
@@ -985,7 +987,7 @@ proptest! {
             ..ValidationLimits::person()
         };
         prop_assert!(validate(&e, path[0].pose.point(), &limits).is_ok());
-        let fixed = limb_kernel::estimation::estimate_online(&path, &ValidationLimits::default()).unwrap();
+        let fixed = limb_kernel::estimation::estimate_online(&path, &ValidationLimits::default(), &PlaneTilt::new()).unwrap();
         let reach = 0.8 * along.hypot(rise);
         prop_assert!(fixed.shoulder.distance(shoulder) > 0.3 * reach, "{fixed:?}");
     }
@@ -1016,7 +1018,7 @@ proptest! {
                 s
             })
             .collect();
-        let e = limb_kernel::estimation::estimate_online(&path, &ValidationLimits::default()).unwrap();
+        let e = limb_kernel::estimation::estimate_online(&path, &ValidationLimits::default(), &PlaneTilt::new()).unwrap();
         let u = e.evidence.uncertainty.expect("the online estimator measures it");
         for value in [u.upper_arm, u.forearm] {
             prop_assert!(value.is_finite() && value >= 0.0, "{u:?}");

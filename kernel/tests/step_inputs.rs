@@ -3,9 +3,10 @@
 //! and a trace nobody drains.
 
 use limb_kernel::geometry::{Pose, Wrench};
+use limb_kernel::monitor::Limit;
 use limb_kernel::state::State;
 use limb_kernel::trace::TRACE_CAPACITY;
-use limb_kernel::{Kernel, KernelConfig, PathSample, Request, StateKind};
+use limb_kernel::{Kernel, KernelConfig, PathSample, Request, StateKind, StopReason};
 
 const PERIOD: f64 = 0.001;
 
@@ -116,4 +117,27 @@ fn an_arm_at_rest_off_the_origin_reads_zero_speed() {
         kernel.step(Some(&dropped), dropped.time).state,
         StateKind::SafeStop
     );
+}
+
+/// REQ-EST-011: a frame's lateral position is a sensor value like the
+/// others: finite, it is taken (any size: only Estimate reads it); not
+/// finite, the running kernel stops on a non-finite sensor at once. A
+/// frame stepped without one is taken as in the sagittal plane.
+#[test]
+fn a_non_finite_lateral_position_is_a_faulty_sensor() {
+    for lateral in [0.0, -0.3, 2.0] {
+        let mut kernel = Kernel::new(KernelConfig::default()).unwrap();
+        let command = kernel.step_with_lateral(Some(&frame(0.0, 0.0)), lateral, 0.0);
+        assert_eq!(command.state, StateKind::Grasp, "{lateral}");
+    }
+    for lateral in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+        let mut kernel = Kernel::new(KernelConfig::default()).unwrap();
+        kernel.step(Some(&frame(0.0, 0.0)), 0.0);
+        let command = kernel.step_with_lateral(Some(&frame(PERIOD, 0.0)), lateral, PERIOD);
+        assert_eq!(command.state, StateKind::SafeStop, "{lateral}");
+        match kernel.stopped().unwrap().reason() {
+            StopReason::Monitor(v) => assert_eq!(v.limit, Limit::NonFiniteSensor),
+            other => panic!("{other:?}"),
+        }
+    }
 }

@@ -78,6 +78,10 @@ pub struct FittedModel {
     /// (`limb_kernel::estimation::FitEvidence::compliance`); `None` when
     /// the method does not measure it.
     pub compliance: Option<f64>,
+    /// The tilt of the arm's plane the estimator read the heights in [rad]
+    /// (`limb_kernel::estimation::FitEvidence::plane_tilt`); `None` when
+    /// the method does not measure it.
+    pub plane_tilt: Option<f64>,
 }
 
 impl FittedModel {
@@ -92,6 +96,7 @@ impl FittedModel {
             uncertainty: estimate.evidence.uncertainty,
             play: estimate.evidence.play,
             compliance: estimate.evidence.compliance,
+            plane_tilt: estimate.evidence.plane_tilt,
         }
     }
 }

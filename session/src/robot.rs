@@ -15,7 +15,8 @@ pub struct Frame {
     /// adjusted), the grasp pose and the external wrench in frame S.
     pub sample: PathSample,
     /// Lateral position y of the grasp in frame S [m], when the robot
-    /// measures it (logged only: the kernel is planar).
+    /// measures it: logged, and given to the kernel (which reads it for the
+    /// tilt of the arm's plane, REQ-EST-011; 0 when not measured).
     pub lateral: Option<f64>,
     /// When the frame arrived, on the session's clock [s] (host monotonic
     /// time; a simulation's own time when it is not paced).

@@ -180,11 +180,13 @@ impl Loop {
     /// One kernel step on `sample` at `now`, counted, hashed and shown to
     /// `observer` (`stale`: a step without a frame, the robot silent;
     /// `sample` is then the last frame, which the kernel judges again).
+    /// `lateral` is the frame's lateral position [m] (0 when the robot
+    /// does not measure it).
     fn step<R, O>(
         &mut self,
         kernel: &mut Kernel,
         observer: &mut O,
-        sample: &PathSample,
+        (sample, lateral): (&PathSample, f64),
         now: f64,
         stale: bool,
     ) -> Command
@@ -192,7 +194,7 @@ impl Loop {
         R: ?Sized,
         O: Observer<R> + ?Sized,
     {
-        let command = kernel.step((!stale).then_some(sample), now);
+        let command = kernel.step_with_lateral((!stale).then_some(sample), lateral, now);
         self.hash.push(&command);
         self.outcome.steps += 1;
         self.outcome.stale_steps += u64::from(stale);
@@ -253,7 +255,7 @@ impl Loop {
         O: Observer<R> + ?Sized,
     {
         if let Some(last) = self.last {
-            let command = self.step::<R, O>(kernel, observer, &last, now, true);
+            let command = self.step::<R, O>(kernel, observer, (&last, 0.0), now, true);
             self.tell::<R, S, O>(kernel, supervisor, observer, &last, &command, now);
         }
     }
@@ -324,7 +326,8 @@ where
         supervisor.before_step(kernel, now, frame.following);
         let state = kernel.state().kind();
         observer.before_step(robot, &frame, state);
-        let command = session.step::<R, O>(kernel, observer, &frame.sample, now, false);
+        let lateral = frame.lateral.unwrap_or(0.0);
+        let command = session.step::<R, O>(kernel, observer, (&frame.sample, lateral), now, false);
         observer.after_step(robot, &frame, state, &command);
         session.tell::<R, S, O>(kernel, supervisor, observer, &frame.sample, &command, now);
         robot.actuate(&command)?;

@@ -89,6 +89,7 @@ fn estimate(
             uncertainty: None,
             play: None,
             compliance: None,
+            plane_tilt: None,
         },
     }
 }
@@ -158,6 +159,7 @@ fn req_val_001_a_consistent_estimate_is_accepted() {
             uncertainty: None,
             play: None,
             compliance: None,
+            plane_tilt: None,
         },
     };
     assert!(validate(&e, Point::new(0.0, 0.0), &ValidationLimits::default()).is_ok());

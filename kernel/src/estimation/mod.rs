@@ -33,6 +33,7 @@ pub mod outlier;
 mod phase;
 pub mod play;
 pub mod refine;
+pub mod tilt;
 
 pub use circle::{
     fit_circle_kasa, fit_circle_taubin, Circle, CircleFitError, ResidualBias, BIAS_BLOCK,
@@ -117,6 +118,11 @@ pub struct FitEvidence {
     /// grasp point with [m/N] ([`compliance`]; 0: a rigid grasp); `None`
     /// for the methods other than [`Method::Online`].
     pub compliance: Option<f64>,
+    /// The tilt of the arm's plane about x the lateral channel showed and
+    /// the heights were read in [rad] ([`tilt`]; 0: a vertical plane, or
+    /// a tilt not shown); `None` for the methods other than
+    /// [`Method::Online`].
+    pub plane_tilt: Option<f64>,
 }
 
 /// Standard uncertainty (one standard deviation) of the fitted lengths
@@ -356,7 +362,9 @@ pub fn estimate_arm(path: &[PathSample], method: Method) -> Result<ArmEstimate, 
         return Err(EstimateError::NonFiniteSample);
     }
     let (phases, fits, method_disagreement) = match method {
-        Method::Online => return estimate_online(path, &ValidationLimits::default()),
+        Method::Online => {
+            return estimate_online(path, &ValidationLimits::default(), &tilt::PlaneTilt::new())
+        }
         Method::Ls => {
             let phases = detect_phases(path, &PointModel::GRASP)?;
             let fits = fit_ls(path, &phases, PointModel::GRASP)?;
@@ -416,6 +424,7 @@ pub fn estimate_arm(path: &[PathSample], method: Method) -> Result<ArmEstimate, 
             uncertainty: None,
             play: None,
             compliance: None,
+            plane_tilt: None,
         },
     })
 }
@@ -527,17 +536,21 @@ fn fit_robust(path: &[PathSample]) -> Result<(Phases, PhaseFits), EstimateError>
 /// `prior` gives the shoulder-rhythm prior [m/rad]
 /// (`ValidationLimits::shoulder_rhythm`; `estimate_arm` uses the default
 /// limits, whose rhythm is none) and the plausible forearm range of the
-/// provisional forearm.
+/// provisional forearm; `tilt` the sums the path was recorded in the
+/// arm's plane with ([`tilt::PlaneTilt::record`]), whose slope the
+/// estimate reports (`estimate_arm` has none: a vertical plane).
 pub fn estimate_online(
     path: &[PathSample],
     prior: &ValidationLimits,
+    tilt: &tilt::PlaneTilt,
 ) -> Result<ArmEstimate, EstimateError> {
     let mut online = online::OnlineEstimator::new();
     for end in 1..=path.len().min(PATH_CAPACITY) {
         online.record(path.get(..end).unwrap_or(&[]), prior);
     }
-    let mut refinement = refine::Refinement::after(&online, path.len(), prior.shoulder_rhythm)
-        .ok_or(EstimateError::UpperArmPhaseTooShort)?;
+    let mut refinement =
+        refine::Refinement::after(&online, path.len(), prior.shoulder_rhythm, tilt)
+            .ok_or(EstimateError::UpperArmPhaseTooShort)?;
     // Each call ends at least one pass; the last call reports the outcome.
     for _ in 0..=refine::MAX_PASSES {
         if let refine::Progress::Done(outcome) = refinement.advance(path, PATH_CAPACITY) {

@@ -7,7 +7,8 @@
 //! the refinement makes fixed passes over the recorded phases, reading
 //! each sample through [`Dequantizer`] (a quantized sensor's runs
 //! interpolated, samples not known within a cell left out: on an
-//! unquantized path, the samples as recorded), and each grasp point G read
+//! unquantized path, the samples as recorded: in the arm's plane,
+//! [`super::tilt`]), and each grasp point G read
 //! as G + c f_ext under the grasp's compliance c the online estimate
 //! measured over the forearm phase ([`super::compliance`]; 0 for a rigid
 //! grasp, and the samples are read as recorded):
@@ -81,6 +82,7 @@ use super::online::{OnlineEstimator, OnlinePhase};
 use super::outlier::is_isolated_outlier;
 use super::phase::{DEPARTURE_TOLERANCE, NOISE_MULTIPLE};
 use super::play::PlayReader;
+use super::tilt::PlaneTilt;
 use super::{ArmEstimate, EstimateError, FitEvidence, LengthUncertainty, Method};
 use crate::arm::{elbow_from_grasp, pitch_offset_at};
 use crate::geometry::{angle_between, Point, Pose};
@@ -373,6 +375,9 @@ pub struct Refinement {
     /// forearm phase ([`super::compliance`]): every pass reads the grasp
     /// point G as G + c f_ext.
     compliance: f64,
+    /// The slope t = tan θ of the arm's plane the path was recorded in
+    /// ([`super::tilt`]; 0 for a vertical plane), reported.
+    tilt_slope: f64,
     /// Samples of (the forearm, the upper-arm) phase not known within a
     /// quantizer's cell ([`super::dequantize`]), left out.
     unread: (usize, usize),
@@ -388,8 +393,21 @@ impl Refinement {
     /// from `forearm.end` to `path_len`; `rhythm` is the shoulder-rhythm
     /// prior [m/rad] (`ValidationLimits::shoulder_rhythm`; non-finite
     /// components count as 0), `compliance` the grasp's [m/N] (non-finite:
+    /// 0), `tilt_slope` the slope tan θ of the arm's plane the path was
+    /// recorded in ([`super::tilt::PlaneTilt::slope`], reported; non-finite:
     /// 0).
-    pub fn new(forearm: Range<usize>, path_len: usize, rhythm: [f64; 2], compliance: f64) -> Self {
+    pub fn new(
+        forearm: Range<usize>,
+        path_len: usize,
+        rhythm: [f64; 2],
+        compliance: f64,
+        tilt_slope: f64,
+    ) -> Self {
+        let tilt_slope = if tilt_slope.is_finite() {
+            tilt_slope
+        } else {
+            0.0
+        };
         // Every circle is set by the pass that fits it before a later pass
         // reads it: the forearm's by the first.
         let unset = Circle {
@@ -423,6 +441,7 @@ impl Refinement {
             } else {
                 0.0
             },
+            tilt_slope,
             unread: (0, 0),
             end_tolerance: 0.0,
             last_on_circle: None,
@@ -432,12 +451,25 @@ impl Refinement {
 
     /// The refinement of `online`'s estimate over a path of `path_len`
     /// samples, once its upper-arm phase has begun, under shoulder-rhythm
-    /// prior `rhythm` [m/rad] ([`Refinement::new`]); `None` before.
-    pub fn after(online: &OnlineEstimator, path_len: usize, rhythm: [f64; 2]) -> Option<Self> {
+    /// prior `rhythm` [m/rad], the path recorded in the arm's plane of
+    /// `tilt` ([`Refinement::new`]); `None` before.
+    pub fn after(
+        online: &OnlineEstimator,
+        path_len: usize,
+        rhythm: [f64; 2],
+        tilt: &PlaneTilt,
+    ) -> Option<Self> {
         online.forearm()?;
         let (lift, forearm_end) = online.split();
-        (online.phase() == OnlinePhase::UpperArm)
-            .then(|| Self::new(lift..forearm_end, path_len, rhythm, online.compliance()))
+        (online.phase() == OnlinePhase::UpperArm).then(|| {
+            Self::new(
+                lift..forearm_end,
+                path_len,
+                rhythm,
+                online.compliance(),
+                tilt.slope(),
+            )
+        })
     }
 
     /// The pass running now.
@@ -749,6 +781,7 @@ impl Refinement {
                 }),
                 play: Some(self.play),
                 compliance: Some(self.compliance),
+                plane_tilt: Some(libm::atan(self.tilt_slope)),
                 resolution: {
                     let step = self.reader.resolution();
                     step.x

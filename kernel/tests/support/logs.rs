@@ -1,15 +1,22 @@
 //! Test support: reads the shared plant.md logs (std only, tests and
 //! examples). Ground-truth columns are returned separately, for scoring.
 
+use limb_kernel::estimation::tilt::PlaneTilt;
 use limb_kernel::geometry::{Point, Pose, Wrench};
 use limb_kernel::path::PathSample;
 
 /// The shared data directory beside the repository.
 pub const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/data");
 
-/// A log: the path the estimator sees and the logged ground-truth shoulder.
+/// A log: the path the estimator sees (recorded as the kernel records it,
+/// in the arm's plane its lateral column shows; a vertical one without
+/// the column), that plane's tilt, and the logged ground-truth shoulder.
 pub struct Log {
     pub path: Vec<PathSample>,
+    // Read by the online estimator's tests; the table example runs only
+    // the offline methods, which read no tilt.
+    #[allow(dead_code)]
+    pub tilt: PlaneTilt,
     pub shoulder: Option<Point>,
 }
 
@@ -28,21 +35,29 @@ pub fn read(relative: &str) -> Log {
     let required = |name: &str| column(name).unwrap_or_else(|| panic!("{file}: no column {name}"));
     let [t, x, z, psi, fx, fz, ty] = ["t", "x", "z", "psi", "fx", "fz", "ty"].map(required);
     let (sx, sz) = (column("shoulder_x"), column("shoulder_z"));
+    let y = column("y");
+    let mut tilt = PlaneTilt::new();
     let mut path = Vec::new();
     let mut shoulder = None;
     for line in lines.filter(|l| !l.trim().is_empty()) {
         let fields: Vec<&str> = line.split(',').collect();
         let value = |i: usize| fields[i].trim().parse::<f64>().expect("number");
-        path.push(PathSample {
+        let measured = PathSample {
             time: value(t),
             pose: Pose::new(value(x), value(z), value(psi)),
             wrench: Wrench::new(value(fx), value(fz), value(ty)),
-        });
+        };
+        // As the kernel records it (REQ-EST-011).
+        path.push(tilt.record(&measured, y.map_or(0.0, value)));
         if let (Some(sx), Some(sz)) = (sx, sz) {
             shoulder = Some(Point::new(value(sx), value(sz)));
         }
     }
-    Log { path, shoulder }
+    Log {
+        path,
+        tilt,
+        shoulder,
+    }
 }
 
 /// Arm lengths (l1, l2) [m] of benchmark case 1..=6 (plant.md Table 1).
