@@ -105,8 +105,8 @@ impl PlaneTilt {
         }
         let slope = self.yz / self.zz;
         let residual = (self.yy - slope * self.yz).max(0.0) / f64::from(self.count - 1);
-        // |t| > k σ_t compared squared: no square root, so the reading is
-        // one deterministic value wherever the proofs stub `sqrt`.
+        // |t| > k σ_t compared squared: no square root per recorded sample
+        // (soft-float on the target), and none for the slope's proof.
         let variance = residual / self.zz;
         let shown = slope.is_finite()
             && (MIN_TILT..=MAX_TILT).contains(&libm::fabs(slope))
@@ -349,7 +349,8 @@ mod verification {
                 pose: Pose::new(0.1, 0.2, 0.3),
                 wrench: Wrench::new(1.0, 2.0, 3.0),
             };
-            let right = { tilt }.record(&sample, 0.04);
+            let mut recording = tilt;
+            let right = recording.record(&sample, 0.04);
             assert_ne!(right.pose.z, sample.pose.z, "a tilt shown");
             assert_eq!(check_record(&sample, &right), Ok(()));
             let moved = PathSample { time: 1.1, ..right };
