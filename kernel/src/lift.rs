@@ -208,7 +208,7 @@ impl ShapedLift {
                 }
                 self.clock = next;
                 let envelope = judged.unwrap_or_else(|| {
-                    online.joint_envelope(online.grasp(frame.pose, frame.wrench), settings.prior)
+                    online.joint_envelope(frame.pose, frame.wrench, settings.prior)
                 });
                 let mut reason = end_reason(online, envelope, shaping, settings.limits);
                 if reason.is_none() && next >= duration {
@@ -349,7 +349,7 @@ fn lift_hold(frame: &PathSample, online: &OnlineEstimator, settings: &LiftSettin
     let carried = holding_pose(frame, settings.stiffness);
     let slack = |pose: Pose| {
         online
-            .joint_envelope(online.grasp(pose, frame.wrench), settings.prior)
+            .joint_envelope(pose, frame.wrench, settings.prior)
             .map(|envelope| joint_slack(envelope, settings.shaping, settings.limits))
             .map(|(elbow, shoulder)| elbow.min(shoulder))
     };

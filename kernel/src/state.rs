@@ -474,8 +474,7 @@ impl Estimate {
         frame: &PathSample,
         prior: &ValidationLimits,
     ) -> Option<JointEnvelope> {
-        let grasp = self.online.grasp(frame.pose, frame.wrench);
-        self.online.joint_envelope(grasp, prior)
+        self.online.joint_envelope(frame.pose, frame.wrench, prior)
     }
 
     /// Stops.

@@ -474,13 +474,14 @@ fn the_joint_envelope_is_translation_invariant_and_widened_by_its_uncertainty() 
         let mut envelopes = Vec::new();
         let mut widened = 0;
         replay_online(&log.path, |index, online| {
-            let pose = log.path[index].pose;
-            let envelope = online.joint_envelope(pose, &prior);
+            let (pose, wrench) = (log.path[index].pose, log.path[index].wrench);
+            let envelope = online.joint_envelope(pose, wrench, &prior);
             assert_eq!(envelope.is_some(), online.forearm().is_some());
             if let (Some(e), Some(forearm), Some(upper)) =
                 (envelope, online.forearm(), online.upper_arm())
             {
-                let elbow = elbow_from_grasp(pose, forearm.circle.radius, online.pitch_offset());
+                let grasp = online.grasp(pose, wrench);
+                let elbow = elbow_from_grasp(grasp, forearm.circle.radius, online.pitch_offset());
                 let shoulder = upper.circle.centre;
                 let nominal = (elbow.z - shoulder.z).atan2(shoulder.x - elbow.x);
                 let spread = 3.0 * (upper.centre_sd + forearm.radius_sd) / elbow.distance(shoulder);
@@ -500,7 +501,7 @@ fn the_joint_envelope_is_translation_invariant_and_widened_by_its_uncertainty() 
             "case {case}: {widened} samples with an upper arm"
         );
         replay_online(&moved, |index, online| {
-            let here = online.joint_envelope(moved[index].pose, &prior);
+            let here = online.joint_envelope(moved[index].pose, moved[index].wrench, &prior);
             match (here, envelopes[index]) {
                 (Some(a), Some(b)) => assert!(
                     (a.max_shoulder_elevation - b.max_shoulder_elevation).abs() < 1e-6

@@ -169,7 +169,7 @@ fn the_lift_ends_at_the_joint_margin_it_reaches_first() {
         let mut ended_at = None;
         replay(1, &config, &mut |frame, _, lift, online, _| {
             let reached = online
-                .joint_envelope(frame.pose, &config.validation)
+                .joint_envelope(frame.pose, frame.wrench, &config.validation)
                 .is_some_and(within);
             if ended_at.is_none() && lift.ended().is_some() {
                 ended_at = Some(frame.time);
@@ -216,7 +216,9 @@ fn req_mon_011_the_hold_keeps_the_joints_slack_to_their_limits() {
             };
             checked = true;
             let slack = |pose| {
-                let envelope = online.joint_envelope(pose, &config.validation).unwrap();
+                let envelope = online
+                    .joint_envelope(pose, frame.wrench, &config.validation)
+                    .unwrap();
                 let (elbow, shoulder) =
                     lift::joint_slack(envelope, &config.lift_shaping, &config.limits);
                 elbow.min(shoulder)

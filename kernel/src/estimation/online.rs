@@ -378,10 +378,26 @@ impl OnlineEstimator {
         }
     }
 
-    /// Worst-case joint angles at measured or commanded pose `pose` under
-    /// the provisional model, with the prior l1 range of `prior`; `None`
+    /// Worst-case joint angles at the grasp measured (or commanded) at
+    /// `pose` under external wrench `wrench` (frame S) under the
+    /// provisional model, with the prior l1 range of `prior`; `None`
     /// before a provisional forearm exists or for a non-finite pose.
-    pub fn joint_envelope(&self, pose: Pose, prior: &ValidationLimits) -> Option<JointEnvelope> {
+    ///
+    /// The grasp is read through the measured compliance ([`Self::grasp`]):
+    /// through a soft cuff the robot's pose is not the arm's, and the only
+    /// envelope there is reads the arm's (a caller cannot judge the joints
+    /// at the robot's pose by mistake).
+    pub fn joint_envelope(
+        &self,
+        pose: Pose,
+        wrench: Wrench,
+        prior: &ValidationLimits,
+    ) -> Option<JointEnvelope> {
+        self.envelope_at_grasp(self.grasp(pose, wrench), prior)
+    }
+
+    /// [`Self::joint_envelope`] at the arm's grasp point `pose` itself.
+    fn envelope_at_grasp(&self, pose: Pose, prior: &ValidationLimits) -> Option<JointEnvelope> {
         let forearm = self.forearm?;
         if !pose.is_finite() {
             return None;
@@ -492,5 +508,31 @@ mod tests {
         let rigid = forearm_turn(0.19, &prior);
         assert_eq!(rigid.compliance(), 0.0);
         assert_eq!(rigid.grasp(pose, wrench), pose);
+    }
+
+    /// REQ-EST-010: the joints are judged at the arm's grasp, not the
+    /// robot's pose: through the 700 N/m cuff the envelope is the one at
+    /// G + c f_ext and differs from the one at the measured pose; through
+    /// a rigid grasp both are the same.
+    #[test]
+    fn req_est_010_the_joints_are_judged_where_the_cuff_holds_the_arm() {
+        let prior = ValidationLimits::default();
+        let cuffed = cuffed_forearm_turn(0.19, 1.0 / 700.0, &prior);
+        let (pose, wrench) = (Pose::new(0.05, 0.12, 0.9), Wrench::new(2.0, -8.0, 0.0));
+        let judged = cuffed.joint_envelope(pose, wrench, &prior).unwrap();
+        let at_grasp = cuffed
+            .envelope_at_grasp(cuffed.grasp(pose, wrench), &prior)
+            .unwrap();
+        let at_robot = cuffed.envelope_at_grasp(pose, &prior).unwrap();
+        assert_eq!(judged, at_grasp);
+        assert!(
+            (judged.min_elbow_flexion - at_robot.min_elbow_flexion).abs() > 1e-3,
+            "{judged:?} {at_robot:?}"
+        );
+        let rigid = forearm_turn(0.19, &prior);
+        assert_eq!(
+            rigid.joint_envelope(pose, wrench, &prior),
+            rigid.envelope_at_grasp(pose, &prior)
+        );
     }
 }
