@@ -11,6 +11,9 @@
 //! overrides it; `limb estimate --json` prints it (`arm`), and a `limb run
 //! --log` carries it in the logged configuration
 //! (`validation.shoulder_rhythm`).
+//!
+//! `limb diagnose --arm` puts the same choice to the diagnosis's sim, as
+//! the body the lengths are put on ([`ArmModel::build`]).
 
 use limb_kernel::config::ValidationLimits;
 use limb_kernel::KernelConfig;
@@ -38,5 +41,16 @@ impl ArmModel {
         config.validation.shoulder_rhythm = limits.shoulder_rhythm;
         config.validation.max_shoulder_height = limits.max_shoulder_height;
         config
+    }
+
+    /// The body the diagnosis's sim puts the arm's lengths on: `rod`
+    /// plant.md's dummy (uniform rods of 1.55 kg and 1.317 kg), `person`
+    /// the reference person's segments scaled to the lengths
+    /// (`limb_sim::ArmParameters::person`).
+    pub fn build(self) -> limb_sim::ArmBuild {
+        match self {
+            ArmModel::Rod => limb_sim::ArmBuild::Rod,
+            ArmModel::Person => limb_sim::ArmBuild::Person,
+        }
     }
 }

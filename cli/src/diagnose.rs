@@ -27,6 +27,12 @@ pub struct DiagnoseArgs {
     /// Forearm length of the sim [m], held fixed (absent: fitted).
     #[arg(long, requires = "l1")]
     l2: Option<f64>,
+    /// The body the sim puts the lengths on: `rod` (default, plant.md's
+    /// dummy: uniform rods of 1.55 kg and 1.317 kg) or `person` (the
+    /// reference person's segments scaled to the lengths: a log of a
+    /// person's arm, `spec/human-arm.md`).
+    #[arg(long, value_enum, default_value = "rod", conflicts_with = "self_check")]
+    arm: crate::arm_model::ArmModel,
     /// Print one JSON object on stdout.
     #[arg(long)]
     json: bool,
@@ -96,15 +102,16 @@ pub fn run(args: &DiagnoseArgs) -> Result<(), CliError> {
             bar.set_message(p.candidate.to_string());
         }
     };
-    let diagnosed = diagnose(lengths, &records, threads, &tell).map_err(|error| {
-        use limb_diagnosis::plant::arm::DiagnoseError as E;
-        let text = format!("{}: {error}", log.display());
-        match error {
-            E::Engine(_) | E::SelfCheck(_) => CliError::Internal(text),
-            E::Arm(limb_diagnosis::plant::arm::ArmError::Sim(_)) => CliError::Internal(text),
-            E::Arm(_) | E::TooShort(_) => CliError::BadInput(text),
-        }
-    })?;
+    let diagnosed =
+        diagnose(lengths, args.arm.build(), &records, threads, &tell).map_err(|error| {
+            use limb_diagnosis::plant::arm::DiagnoseError as E;
+            let text = format!("{}: {error}", log.display());
+            match error {
+                E::Engine(_) | E::SelfCheck(_) => CliError::Internal(text),
+                E::Arm(limb_diagnosis::plant::arm::ArmError::Sim(_)) => CliError::Internal(text),
+                E::Arm(_) | E::TooShort(_) => CliError::BadInput(text),
+            }
+        })?;
     if let Some(bar) = progress {
         bar.finish_and_clear();
     }
@@ -138,8 +145,8 @@ fn facts(d: &Diagnosis) -> Vec<(String, String)> {
             "arm (fitted, corrected for the effects)".to_string()
         },
         format!(
-            "l1 = {:.4} m, l2 = {:.4} m, shoulder ({:.4}, {:.4}) m",
-            a.l1, a.l2, a.shoulder[0], a.shoulder[1]
+            "l1 = {:.4} m, l2 = {:.4} m, shoulder ({:.4}, {:.4}) m, on a {} build",
+            a.l1, a.l2, a.shoulder[0], a.shoulder[1], a.build
         ),
     )];
     if let Some([l1, l2]) = a.estimate {
@@ -185,11 +192,12 @@ fn human(d: &Diagnosis) -> String {
     }
     let a = &d.arm;
     text += &format!(
-        "arm      l1 = {:.4} m, l2 = {:.4} m, shoulder ({:.4}, {:.4}) m{}\n",
+        "arm      l1 = {:.4} m, l2 = {:.4} m, shoulder ({:.4}, {:.4}) m, on a {} build{}\n",
         a.l1,
         a.l2,
         a.shoulder[0],
         a.shoulder[1],
+        a.build,
         match (a.given, a.estimate) {
             (true, _) => " (given)".to_string(),
             (false, Some([l1, l2])) =>

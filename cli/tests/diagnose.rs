@@ -41,6 +41,7 @@ fn json_has_the_contract_keys_and_the_report_is_written() {
     assert!(json["effects"][0]["held_out_after"].is_number());
     assert!(json.get("unexplained").is_some(), "the key is always there");
     assert_eq!(json["arm"]["given"], true);
+    assert_eq!(json["arm"]["build"], "rod");
     assert_eq!(json["arm"]["l1"], 0.3);
     let ranking = json["ranking"].as_array().unwrap();
     assert_eq!(ranking.len(), 14);
@@ -75,12 +76,27 @@ fn the_human_output_names_effect_gap_and_where() {
     assert_eq!(out.status.code(), Some(0));
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(text.starts_with("effect   none\n"), "{text}");
+    assert!(text.contains(", on a rod build (given)\n"), "{text}");
     // The independent plant's clean log leaves 0.22 σ located in x
     // against the replayed sim: `where` names it, nothing claims it.
     assert!(
         text.contains("\nwhere    ") && !text.contains("unexplained"),
         "{text}"
     );
+}
+
+/// `--arm person` puts the lengths on a person's segments: the dummy's
+/// clean log then reads as a forearm lighter than a person's
+/// (`spec/human-arm.md`, "A person's build").
+#[test]
+fn the_arm_flag_puts_the_lengths_on_a_persons_build() {
+    let log = format!("{EFFECTS}/none.csv");
+    let json = common::json_of(&limb(&[
+        "diagnose", &log, "--l1", "0.3", "--l2", "0.2", "--arm", "person", "--json",
+    ]));
+    assert_eq!(json["arm"]["build"], "person");
+    assert_eq!(json["effect"], "mass_mismatch", "{json}");
+    assert!(json["effects"][0]["params"]["factor"].as_f64().unwrap() < 0.8);
 }
 
 #[test]

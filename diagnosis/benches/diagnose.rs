@@ -13,7 +13,7 @@
 //! The log: `shared/data/effects/backlash.csv` (2 917 samples, 29.16 s).
 
 use criterion::Criterion;
-use limb_diagnosis::plant::arm::{diagnose, ArmModel, Lengths};
+use limb_diagnosis::plant::arm::{diagnose, ArmBuild, ArmModel, Lengths};
 use limb_diagnosis::Model;
 use std::hint::black_box;
 use std::time::Duration;
@@ -30,7 +30,7 @@ fn benches(c: &mut Criterion) {
     group
         .sample_size(10)
         .measurement_time(Duration::from_secs(40));
-    let model = ArmModel::new(Lengths::Given(0.3, 0.2), &records).expect("model");
+    let model = ArmModel::new(Lengths::Given(0.3, 0.2), ArmBuild::Rod, &records).expect("model");
     let mass = model
         .candidates()
         .iter()
@@ -51,7 +51,14 @@ fn benches(c: &mut Criterion) {
     for threads in [1, 2] {
         group.bench_function(format!("all_candidates_{threads}_threads"), |b| {
             b.iter(|| {
-                diagnose(Lengths::Fitted, black_box(&records), threads, &|_| {}).expect("diagnosis")
+                diagnose(
+                    Lengths::Fitted,
+                    ArmBuild::Rod,
+                    black_box(&records),
+                    threads,
+                    &|_| {},
+                )
+                .expect("diagnosis")
             })
         });
     }

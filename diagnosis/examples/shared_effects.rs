@@ -6,7 +6,7 @@
 //! `cargo run --release -p limb-diagnosis --example shared_effects [NAME]`
 //! (with NAME, only the logs whose file name contains it)
 
-use limb_diagnosis::plant::arm::{diagnose, Lengths};
+use limb_diagnosis::plant::arm::{diagnose, ArmBuild, Lengths};
 use std::path::Path;
 use std::time::Instant;
 
@@ -31,7 +31,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             label["l2"].as_f64().ok_or("no l2")?,
         );
         let start = Instant::now();
-        let d = diagnose(Lengths::Fitted, &records, threads, &|_| {})?.diagnosis;
+        let d = diagnose(Lengths::Fitted, ArmBuild::Rod, &records, threads, &|_| {})?.diagnosis;
         let took = start.elapsed().as_secs_f64();
         let fitted: Vec<String> = match d.effects.first() {
             Some(r) => r

@@ -2,7 +2,7 @@
 //! hold anything out, no commanded motion to replay, arm lengths that are
 //! not lengths, times the sim cannot step to.
 
-use limb_diagnosis::plant::arm::{diagnose, ArmError, DiagnoseError, Lengths};
+use limb_diagnosis::plant::arm::{diagnose, ArmBuild, ArmError, DiagnoseError, Lengths};
 use limb_sim::log::Record;
 
 fn log() -> Vec<Record> {
@@ -12,7 +12,7 @@ fn log() -> Vec<Record> {
 }
 
 fn refusal(l1: f64, l2: f64, records: &[Record]) -> DiagnoseError {
-    match diagnose(Lengths::Given(l1, l2), records, 1, &|_| {}) {
+    match diagnose(Lengths::Given(l1, l2), ArmBuild::Rod, records, 1, &|_| {}) {
         Err(error) => error,
         Ok(d) => panic!("accepted: {:?}", d.diagnosis.effect),
     }

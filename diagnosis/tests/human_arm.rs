@@ -11,7 +11,7 @@ mod common;
 use common::{arm_error, diagnosed};
 use limb_diagnosis::plant::arm::blind::simulate;
 use limb_diagnosis::plant::arm::curves::curves;
-use limb_diagnosis::plant::arm::{diagnose, Lengths};
+use limb_diagnosis::plant::arm::{diagnose, ArmBuild, Lengths};
 use limb_diagnosis::report::{page, Subject};
 use limb_sim::effects::Effect;
 
@@ -85,7 +85,7 @@ fn a_cuff_offset_is_named_and_its_report_draws_the_grasp_off_the_line() {
     let (across, along) = (0.006_615_723_613_578_954, -0.018_497_293_857_174_753);
     let effect = Effect::new("cuff_offset", &[("across", across), ("along", along)]).unwrap();
     let records = simulate(l1, l2, 241_495_304_274_520, &[effect]).unwrap();
-    let diagnosed = diagnose(Lengths::Fitted, &records, 2, &|_| {}).unwrap();
+    let diagnosed = diagnose(Lengths::Fitted, ArmBuild::Rod, &records, 2, &|_| {}).unwrap();
     let d = &diagnosed.diagnosis;
     assert_eq!(d.effect, "cuff_offset", "{:?}", d.effects);
     let fitted = &d.effects[0].params;

@@ -6,13 +6,13 @@
 //! peak fitted them to 9 % and 46 % shrink.
 
 use limb_diagnosis::plant::arm::blind::simulate;
-use limb_diagnosis::plant::arm::{diagnose, Lengths};
+use limb_diagnosis::plant::arm::{diagnose, ArmBuild, Lengths};
 use limb_sim::effects::Effect;
 
 fn fitted(l1: f64, l2: f64, seed: u64, amp: f64, freq: f64) -> (String, f64, f64, f64) {
     let effect = Effect::new("active_torque", &[("amp", amp), ("freq", freq)]).unwrap();
     let records = simulate(l1, l2, seed, &[effect]).unwrap();
-    let d = diagnose(Lengths::Given(l1, l2), &records, 2, &|_| {})
+    let d = diagnose(Lengths::Given(l1, l2), ArmBuild::Rod, &records, 2, &|_| {})
         .unwrap()
         .diagnosis;
     let best = &d.ranking[0];

@@ -4,7 +4,7 @@
 //! the label's, the held-out gap shrinks, and the arm corrected for the
 //! effects is within 3 mm of the label's.
 
-use limb_diagnosis::plant::arm::{diagnose, Lengths};
+use limb_diagnosis::plant::arm::{diagnose, ArmBuild, Lengths};
 use std::path::PathBuf;
 
 fn effects_dir() -> PathBuf {
@@ -36,7 +36,7 @@ fn every_labelled_log_is_diagnosed_as_its_effect() {
         let file = label["file"].as_str().unwrap();
         let records = limb_sim::log::read(&effects_dir().join(file)).unwrap();
         let (l1, l2) = (label["l1"].as_f64().unwrap(), label["l2"].as_f64().unwrap());
-        let d = diagnose(Lengths::Fitted, &records, 2, &|_| {})
+        let d = diagnose(Lengths::Fitted, ArmBuild::Rod, &records, 2, &|_| {})
             .unwrap()
             .diagnosis;
         let expected = label["effect"].as_str().unwrap();

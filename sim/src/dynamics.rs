@@ -1,6 +1,7 @@
 //! Rigid-body terms of the two-link arm in its generalised coordinates
 //! q = (q1, q2) (`plant.md`): q1 upper-arm elevation, q2 elbow flexion,
-//! psi = q1 + q2. Links are uniform rods.
+//! psi = q1 + q2. Each link's mass is spread as its
+//! [`crate::params::MassDistribution`] says (plant.md: uniform rods).
 
 use crate::params::ArmParameters;
 
@@ -33,10 +34,10 @@ pub fn arm_terms(a: &ArmParameters, q: Vec2, qd: Vec2) -> ArmTerms {
     arm_terms_with_rod(a, q, qd, a.forearm_length)
 }
 
-/// The terms for arm `a` at q, q̇ whose forearm rod (mass centre at half
-/// of it, inertia m2 rod² / 12) is `rod` long [m] while the grasp is at
-/// the forearm length (`effects::cuff_offset`); [`arm_terms`] is `rod` =
-/// the forearm length.
+/// The terms for arm `a` at q, q̇ whose forearm's mass is spread over
+/// `rod` [m] (centre of mass at `centre` rod, inertia m2 rod² / d by the
+/// forearm's distribution) while the grasp is at the forearm length
+/// (`effects::cuff_offset`); [`arm_terms`] is `rod` = the forearm length.
 pub fn arm_terms_with_rod(a: &ArmParameters, q: Vec2, qd: Vec2, rod: f64) -> ArmTerms {
     let (l1, l2, m1, m2, g) = (
         a.upper_arm_length,
@@ -45,8 +46,12 @@ pub fn arm_terms_with_rod(a: &ArmParameters, q: Vec2, qd: Vec2, rod: f64) -> Arm
         a.forearm_mass,
         a.gravity,
     );
-    let (c1, c2) = (l1 / 2.0, rod / 2.0);
-    let (i1, i2) = (m1 * l1 * l1 / 12.0, m2 * rod * rod / 12.0);
+    let (d1, d2) = (a.upper_arm_distribution, a.forearm_distribution);
+    let (c1, c2) = (l1 * d1.centre, rod * d2.centre);
+    let (i1, i2) = (
+        m1 * l1 * l1 / d1.inertia_divisor,
+        m2 * rod * rod / d2.inertia_divisor,
+    );
     let psi = q[0] + q[1];
     let (s1, co1) = (libm::sin(q[0]), libm::cos(q[0]));
     let (sp, cp) = (libm::sin(psi), libm::cos(psi));

@@ -45,6 +45,9 @@ pub mod scripted;
 pub mod sensing;
 
 pub use effects::{Effect, EffectError, Effects};
-pub use params::{ArmParameters, PlantParameters, RobotParameters, BENCHMARK_ARMS};
+pub use params::{
+    ArmBuild, ArmParameters, MassDistribution, PersonSegment, PlantParameters, RobotParameters,
+    BENCHMARK_ARMS, PERSON_FOREARM, PERSON_UPPER_ARM,
+};
 pub use plant::{Plant, Truth};
 pub use sensing::{Measurement, ANGLE_NOISE, FORCE_NOISE, POSITION_NOISE, STEP, TORQUE_NOISE};

@@ -3,14 +3,14 @@
 //! one), diagnosed without its arm lengths.
 
 use limb_diagnosis::plant::arm::blind::simulate;
-use limb_diagnosis::plant::arm::{diagnose, Diagnosis, Lengths};
+use limb_diagnosis::plant::arm::{diagnose, ArmBuild, Diagnosis, Lengths};
 use limb_sim::effects::Effect;
 
 /// The log of arm (`l1`, `l2`) [m] with noise seed `seed` and `effects`,
 /// diagnosed with the lengths fitted (two threads).
 pub fn diagnosed(l1: f64, l2: f64, seed: u64, effects: &[Effect]) -> Diagnosis {
     let records = simulate(l1, l2, seed, effects).unwrap();
-    diagnose(Lengths::Fitted, &records, 2, &|_| {})
+    diagnose(Lengths::Fitted, ArmBuild::Rod, &records, 2, &|_| {})
         .unwrap()
         .diagnosis
 }

@@ -41,7 +41,7 @@ use crate::model::{Applied, Model, Series};
 use limb_sim::effects::{Effect, Effects, CATALOGUE};
 use limb_sim::log::Record;
 use limb_sim::noise::Gaussian;
-use limb_sim::{scripted, Plant, PlantParameters};
+use limb_sim::{scripted, ArmBuild, ArmParameters, Plant, PlantParameters};
 
 /// Range the upper-arm length is drawn from [m].
 pub const UPPER_ARMS: [f64; 2] = [0.24, 0.36];
@@ -253,7 +253,23 @@ fn pick(random: &mut Gaussian, count: usize) -> usize {
 /// # Errors
 /// The plant's refusal of the arm or the effects, in words.
 pub fn simulate(l1: f64, l2: f64, seed: u64, effects: &[Effect]) -> Result<Vec<Record>, String> {
+    simulate_on(ArmBuild::Rod, l1, l2, seed, effects)
+}
+
+/// [`simulate`] with the lengths put on `build` (a person's segments, or
+/// plant.md's dummy).
+///
+/// # Errors
+/// As [`simulate`].
+pub fn simulate_on(
+    build: ArmBuild,
+    l1: f64,
+    l2: f64,
+    seed: u64,
+    effects: &[Effect],
+) -> Result<Vec<Record>, String> {
     let mut params = PlantParameters::new(l1, l2);
+    params.arm = ArmParameters::built(build, l1, l2);
     params.seed = seed;
     let effects = Effects::new(effects).map_err(|e| e.to_string())?;
     let mut plant = Plant::with_effects(params, effects)?;
@@ -330,7 +346,7 @@ fn identifiable_size(
     applied: &[Applied],
 ) -> f64 {
     let nominal = |(l1, l2): (f64, f64)| {
-        ArmModel::new(Lengths::Given(l1, l2), records)
+        ArmModel::new(Lengths::Given(l1, l2), ArmBuild::Rod, records)
             .ok()
             .and_then(|m| m.predict(&[]).ok())
     };
@@ -488,8 +504,14 @@ fn case(drawn: &Drawn) -> Result<Case, DiagnoseError> {
     let ((l1, l2), seed) = (drawn.arm, drawn.seed);
     let (classes, effects) = (&drawn.classes, &drawn.effects);
     let records = simulate(l1, l2, seed, effects).map_err(DiagnoseError::SelfCheck)?;
-    let diagnosed = diagnose(Lengths::Fitted, &records, 1, &|_: Progress| {})?;
-    let truth_model = ArmModel::new(Lengths::Given(l1, l2), &records)?;
+    let diagnosed = diagnose(
+        Lengths::Fitted,
+        ArmBuild::Rod,
+        &records,
+        1,
+        &|_: Progress| {},
+    )?;
+    let truth_model = ArmModel::new(Lengths::Given(l1, l2), ArmBuild::Rod, &records)?;
     let applied: Vec<[Applied; 1]> = classes
         .iter()
         .zip(effects)

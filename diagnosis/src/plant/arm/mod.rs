@@ -17,5 +17,6 @@ pub mod model;
 pub mod outcome;
 pub mod replay;
 
+pub use limb_sim::ArmBuild;
 pub use model::{ArmError, ArmModel, Lengths};
 pub use outcome::{diagnose, DiagnoseError, Diagnosed, Diagnosis};

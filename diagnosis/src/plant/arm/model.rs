@@ -31,7 +31,8 @@ use limb_sim::effects::measurement::{self, reading, Reading, MEASUREMENT_SIDE};
 use limb_sim::effects::{Effect, Effects};
 use limb_sim::log::Record;
 use limb_sim::{
-    Plant, PlantParameters, ANGLE_NOISE, FORCE_NOISE, POSITION_NOISE, STEP, TORQUE_NOISE,
+    ArmBuild, ArmParameters, Plant, PlantParameters, ANGLE_NOISE, FORCE_NOISE, POSITION_NOISE,
+    STEP, TORQUE_NOISE,
 };
 use std::sync::{Arc, Mutex};
 use thiserror::Error;
@@ -201,6 +202,8 @@ const GRASP_SLIP: &str = "grasp_slip";
 /// The reference plant compared with one log.
 pub struct ArmModel {
     lengths: Lengths,
+    /// The body the lengths are put on (plant.md's dummy or a person).
+    build: ArmBuild,
     /// Where the fit of the lengths starts (the kernel's estimate).
     start: Option<(f64, f64)>,
     /// The commanded set-point at every integration step to the last
@@ -215,14 +218,15 @@ pub struct ArmModel {
 }
 
 impl ArmModel {
-    /// The sim of an arm of `lengths` against `records`, driven by their
-    /// commanded set-point. `y` is compared when every record has it.
+    /// The sim of an arm of `lengths` on `build` against `records`, driven
+    /// by their commanded set-point. `y` is compared when every record has
+    /// it.
     ///
     /// # Errors
     /// See [`ArmError`].
-    pub fn new(lengths: Lengths, records: &[Record]) -> Result<Self, ArmError> {
+    pub fn new(lengths: Lengths, build: ArmBuild, records: &[Record]) -> Result<Self, ArmError> {
         if let Lengths::Given(l1, l2) = lengths {
-            PlantParameters::new(l1, l2)
+            Self::parameters(build, l1, l2)
                 .check()
                 .map_err(ArmError::Arm)?;
         }
@@ -272,6 +276,7 @@ impl ArmModel {
         }
         let model = Self {
             lengths,
+            build,
             start,
             set_points,
             data: Data {
@@ -432,6 +437,11 @@ impl ArmModel {
         self.lengths
     }
 
+    /// The body the lengths are put on.
+    pub fn build(&self) -> ArmBuild {
+        self.build
+    }
+
     /// The kernel's estimate the fit of the lengths starts at, when the
     /// lengths are fitted and the kernel could estimate them.
     pub fn start(&self) -> Option<(f64, f64)> {
@@ -459,10 +469,15 @@ impl ArmModel {
         (arm, effects)
     }
 
-    /// The plant's parameters for an arm `l1`, `l2` (noise off).
-    fn parameters(l1: f64, l2: f64) -> PlantParameters {
+    /// The plant's parameters for an arm `l1`, `l2` on `build` (noise off).
+    fn parameters(build: ArmBuild, l1: f64, l2: f64) -> PlantParameters {
         let snap = |l: f64| (l / LENGTH_GRAIN).round() * LENGTH_GRAIN;
         let mut params = PlantParameters::new(snap(l1), snap(l2));
+        params.arm = ArmParameters::built(
+            build,
+            params.arm.upper_arm_length,
+            params.arm.forearm_length,
+        );
         params.noise = false;
         params
     }
@@ -480,7 +495,7 @@ impl ArmModel {
     /// The nominal record of arm `l1`, `l2`: what the robot senses at
     /// every step, noise off (cached).
     fn nominal(&self, l1: f64, l2: f64) -> Result<Arc<Vec<Reading>>, ModelError> {
-        let params = Self::parameters(l1, l2);
+        let params = Self::parameters(self.build, l1, l2);
         let key = (
             params.arm.upper_arm_length.to_bits(),
             params.arm.forearm_length.to_bits(),
@@ -541,7 +556,7 @@ impl ArmModel {
 
     /// The plant of arm `l1`, `l2` re-run with `effects`, noise off.
     fn simulated(&self, (l1, l2): (f64, f64), effects: Effects) -> Result<Series, ModelError> {
-        let plant = Plant::with_effects(Self::parameters(l1, l2), effects)
+        let plant = Plant::with_effects(Self::parameters(self.build, l1, l2), effects)
             .map_err(ModelError::Simulation)?;
         let mut rows = Vec::with_capacity(self.steps.len());
         let mut next = self.steps.iter().peekable();

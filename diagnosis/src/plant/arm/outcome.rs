@@ -13,6 +13,7 @@ use crate::engine::{select, EngineError, Gap, Options, Problem, Progress, Ranked
 use crate::holdout::{HoldOut, TooShort};
 use crate::locate::Location;
 use limb_sim::log::Record;
+use limb_sim::ArmBuild;
 use serde::Serialize;
 use thiserror::Error;
 
@@ -78,6 +79,9 @@ pub struct Arm {
     pub shoulder: [f64; 2],
     /// The lengths were given (held fixed), not fitted.
     pub given: bool,
+    /// The body the lengths are on: `rod` (plant.md's dummy) or `person`
+    /// ([`ArmBuild`]).
+    pub build: &'static str,
     /// The kernel's estimate from the same log (`limb estimate`, auto),
     /// where the fit started, when fitted and the kernel had one.
     pub estimate: Option<[f64; 2]>,
@@ -144,6 +148,7 @@ impl Diagnosis {
             l2,
             shoulder: [l1 + l2, 0.0],
             given: matches!(model.lengths(), Lengths::Given(..)),
+            build: model.build().name(),
             estimate: model.start().map(|(a, b)| [a, b]),
         };
         Self {
@@ -180,18 +185,20 @@ pub struct Diagnosed {
 }
 
 /// Diagnoses `records` against the reference plant driven by their
-/// commanded set-point, with the arm `lengths` given or fitted.
+/// commanded set-point, with the arm `lengths` given or fitted, put on
+/// `build` (plant.md's dummy, or a person's segments).
 /// Ground-truth columns are not read.
 ///
 /// # Errors
 /// See [`DiagnoseError`].
 pub fn diagnose(
     lengths: Lengths,
+    build: ArmBuild,
     records: &[Record],
     threads: usize,
     progress: &(dyn Fn(Progress) + Sync),
 ) -> Result<Diagnosed, DiagnoseError> {
-    let model = ArmModel::new(lengths, records)?;
+    let model = ArmModel::new(lengths, build, records)?;
     let hold_out = HoldOut::default();
     let selection = {
         let problem = Problem::split(&model, hold_out)?;

@@ -1,0 +1,90 @@
+//! The body the lengths are put on (`--arm rod|person`,
+//! `spec/human-arm.md` "A person's build"): a person's forearm and hand
+//! weigh more than the dummy's rod and carry their mass further out, so a
+//! person's log read on the dummy's rods shows a "mass mismatch" that is
+//! only the build. Read on the person's build, the same log is clean, and
+//! a real excess (a cast) is still found: as the forearm's weight moment,
+//! which a slow lift cannot split between a heavier forearm
+//! (`mass_mismatch`) and one whose mass lies further beyond the cuff
+//! (`cuff_offset`'s `along`); `spec/human-arm.md` says why.
+
+use limb_diagnosis::plant::arm::blind::simulate_on;
+use limb_diagnosis::plant::arm::{diagnose, ArmBuild, Diagnosis, Lengths};
+use limb_sim::effects::Effect;
+
+/// A held-out arm of a person's proportions (not the reference person's
+/// lengths, so the cube law is exercised) and its noise seed.
+const ARM: (f64, f64) = (0.312, 0.236);
+const SEED: u64 = 9_117;
+
+/// The person's log with `effects`, diagnosed on `build`, lengths fitted.
+fn read_on(build: ArmBuild, effects: &[Effect]) -> Diagnosis {
+    let records = simulate_on(ArmBuild::Person, ARM.0, ARM.1, SEED, effects).unwrap();
+    diagnose(Lengths::Fitted, build, &records, 2, &|_| {})
+        .unwrap()
+        .diagnosis
+}
+
+fn arm_error(d: &Diagnosis) -> f64 {
+    (d.arm.l1 - ARM.0).abs().max((d.arm.l2 - ARM.1).abs())
+}
+
+#[test]
+fn a_persons_log_read_on_the_dummys_rods_shows_a_mass_mismatch() {
+    let d = read_on(ArmBuild::Rod, &[]);
+    assert_eq!(d.effect, "mass_mismatch", "{:?}", d.effects);
+    let factor = d.effects[0].params["factor"];
+    assert!(factor > 1.5, "factor {factor}");
+}
+
+#[test]
+fn a_persons_log_read_on_a_persons_build_is_clean() {
+    let d = read_on(ArmBuild::Person, &[]);
+    assert!(d.effects.is_empty(), "{:?}", d.effects);
+    assert!(arm_error(&d) < 0.001, "arm {:?}", d.arm);
+}
+
+/// The forearm's gravity moment the effects found, over the build's:
+/// `mass_mismatch`'s factor times `cuff_offset`'s (l2 + along) / l2.
+fn forearm_moment_factor(d: &Diagnosis) -> f64 {
+    d.effects
+        .iter()
+        .map(|e| match e.effect.as_str() {
+            "mass_mismatch" => e.params["factor"],
+            "cuff_offset" => (d.arm.l2 + e.params["along"]) / d.arm.l2,
+            _ => 1.0,
+        })
+        .product()
+}
+
+#[test]
+fn a_cast_on_a_persons_forearm_is_found_as_the_forearms_weight() {
+    let d = read_on(ArmBuild::Person, &[cast()]);
+    assert!(
+        ["mass_mismatch", "cuff_offset"].contains(&d.effect.as_str()),
+        "{:?}",
+        d.effects
+    );
+    let factor = forearm_moment_factor(&d);
+    assert!(
+        (factor - 1.5).abs() < 0.05,
+        "moment x{factor}: {:?}",
+        d.effects
+    );
+}
+
+/// Open (issue 35): the cast's log is read as `cuff_offset` (along
+/// 0.118 m, the same moment) and then a `shoulder_rhythm` of -0.048 m/rad
+/// that a 96 mm longer upper arm pays for (l1 0.408 m for 0.312 m): the
+/// held-out criterion does not yet prefer the one effect that explains
+/// the log with the arm right.
+#[test]
+#[ignore = "issue 35: a cast's arm comes back 96 mm long (cuff_offset + shoulder_rhythm)"]
+fn a_cast_leaves_the_arm_within_3_mm() {
+    let d = read_on(ArmBuild::Person, &[cast()]);
+    assert!(arm_error(&d) < 0.003, "arm {:?}: {:?}", d.arm, d.ranking);
+}
+
+fn cast() -> Effect {
+    Effect::new("mass_mismatch", &[("factor", 1.5)]).unwrap()
+}
