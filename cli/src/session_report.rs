@@ -94,6 +94,10 @@ pub struct ModelReport {
     /// The grasp compliance the estimator measured and read out [m/N].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub compliance: Option<f64>,
+    /// A yielding trunk's compliance the estimator measured and read out
+    /// [m/N].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub trunk_compliance: Option<f64>,
     /// The tilt of the arm's plane the estimator read the heights in [rad].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub plane_tilt: Option<f64>,
@@ -310,6 +314,7 @@ fn model_report(model: &FittedModel, truth: &TruthReport) -> ModelReport {
         uncertainty_l2: model.uncertainty.map(|u| u.forearm),
         play: model.play,
         compliance: model.compliance,
+        trunk_compliance: model.trunk_compliance,
         plane_tilt: model.plane_tilt,
     }
 }

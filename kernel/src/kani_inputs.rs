@@ -159,6 +159,7 @@ pub(crate) fn validated_arm() -> ValidatedArm {
             uncertainty: None,
             play: None,
             compliance: None,
+            trunk_compliance: None,
             plane_tilt: None,
         },
     };

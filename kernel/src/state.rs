@@ -448,15 +448,10 @@ impl Estimate {
         reason: LiftEnd,
         config: &KernelConfig,
     ) -> Result<(), StopReason> {
-        let refinement = Refinement::after(
-            &self.online,
-            path_len,
-            config.validation.shoulder_rhythm,
-            &self.tilt,
-        )
-        .ok_or(StopReason::EstimationFailed(
-            EstimateError::UpperArmPhaseTooShort,
-        ))?;
+        let refinement = Refinement::after(&self.online, path_len, &config.validation, &self.tilt)
+            .ok_or(StopReason::EstimationFailed(
+                EstimateError::UpperArmPhaseTooShort,
+            ))?;
         self.stage = EstimateStage::Concluding(Conclusion {
             hold,
             reason,

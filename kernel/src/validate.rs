@@ -522,6 +522,7 @@ mod verification {
                 },
                 play: None,
                 compliance: None,
+                trunk_compliance: None,
                 plane_tilt: None,
             },
         };

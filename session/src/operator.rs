@@ -78,6 +78,10 @@ pub struct FittedModel {
     /// (`limb_kernel::estimation::FitEvidence::compliance`); `None` when
     /// the method does not measure it.
     pub compliance: Option<f64>,
+    /// A yielding trunk's compliance the estimator measured and read out
+    /// [m/N] (`limb_kernel::estimation::FitEvidence::trunk_compliance`);
+    /// `None` when the method does not measure it.
+    pub trunk_compliance: Option<f64>,
     /// The tilt of the arm's plane the estimator read the heights in [rad]
     /// (`limb_kernel::estimation::FitEvidence::plane_tilt`); `None` when
     /// the method does not measure it.
@@ -96,6 +100,7 @@ impl FittedModel {
             uncertainty: estimate.evidence.uncertainty,
             play: estimate.evidence.play,
             compliance: estimate.evidence.compliance,
+            trunk_compliance: estimate.evidence.trunk_compliance,
             plane_tilt: estimate.evidence.plane_tilt,
         }
     }

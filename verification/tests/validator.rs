@@ -89,6 +89,7 @@ fn estimate(
             uncertainty: None,
             play: None,
             compliance: None,
+            trunk_compliance: None,
             plane_tilt: None,
         },
     }
@@ -159,6 +160,7 @@ fn req_val_001_a_consistent_estimate_is_accepted() {
             uncertainty: None,
             play: None,
             compliance: None,
+            trunk_compliance: None,
             plane_tilt: None,
         },
     };

@@ -71,6 +71,18 @@ impl ValidationLimits {
             ..Self::default()
         }
     }
+
+    /// Whether these limits know the arm's resting posture so well that it
+    /// pins the resting shoulder at the resting elbow's height: the
+    /// shoulder's height is checked to within a fit's residual limit, and
+    /// no shoulder rhythm moves it (`plant.md`'s arm, flat on the table:
+    /// the default). The refinement then looks for a yielding trunk where a
+    /// fixed shoulder does not explain the elbow's path (REQ-EST-012); a
+    /// person's posture (`person()`) does not pin it, and a trunk's yield
+    /// and the shoulder's position are then not told apart.
+    pub fn pins_resting_shoulder(&self) -> bool {
+        self.max_shoulder_height <= self.max_residual && self.shoulder_rhythm == [0.0, 0.0]
+    }
 }
 
 impl Default for ValidationLimits {

@@ -118,6 +118,11 @@ pub struct FitEvidence {
     /// grasp point with [m/N] ([`compliance`]; 0: a rigid grasp); `None`
     /// for the methods other than [`Method::Online`].
     pub compliance: Option<f64>,
+    /// A yielding trunk's compliance [m/N] the upper-arm fits measured and
+    /// read the elbow points with, E − c f_ext (`refine`, REQ-EST-012; 0:
+    /// a fixed shoulder, or a yield not looked for or not shown); `None`
+    /// for the methods other than [`Method::Online`].
+    pub trunk_compliance: Option<f64>,
     /// The tilt of the arm's plane about x the lateral channel showed and
     /// the heights were read in [rad] ([`tilt`]; 0: a vertical plane, or
     /// a tilt not shown); `None` for the methods other than
@@ -424,6 +429,7 @@ pub fn estimate_arm(path: &[PathSample], method: Method) -> Result<ArmEstimate, 
             uncertainty: None,
             play: None,
             compliance: None,
+            trunk_compliance: None,
             plane_tilt: None,
         },
     })
@@ -548,9 +554,8 @@ pub fn estimate_online(
     for end in 1..=path.len().min(PATH_CAPACITY) {
         online.record(path.get(..end).unwrap_or(&[]), prior);
     }
-    let mut refinement =
-        refine::Refinement::after(&online, path.len(), prior.shoulder_rhythm, tilt)
-            .ok_or(EstimateError::UpperArmPhaseTooShort)?;
+    let mut refinement = refine::Refinement::after(&online, path.len(), prior, tilt)
+        .ok_or(EstimateError::UpperArmPhaseTooShort)?;
     // Each call ends at least one pass; the last call reports the outcome.
     for _ in 0..=refine::MAX_PASSES {
         if let refine::Progress::Done(outcome) = refinement.advance(path, PATH_CAPACITY) {

@@ -46,9 +46,29 @@
 //!    l1 and the glenohumeral centre at rest. Without a prior (a fixed
 //!    shoulder) they are the elbow path's circle and these passes are
 //!    skipped;
+//!    Where the validator's limits pin the resting posture
+//!    (`ValidationLimits::pins_resting_shoulder`: the arm flat on the
+//!    table, the shoulder at the resting elbow's height and l1 from it
+//!    along x), no rhythm prior is given, the fixed shoulder's last fit
+//!    leaves an RMS residual or a residual bias beyond the validator's
+//!    limits, and no grasp point of the lift stepped more than
+//!    [`MAX_TRUNK_STEP`] from the one before (a slip), instead
+//!    [`ITERATIONS`] Gauss-Newton passes fit a **yielding trunk**
+//!    (REQ-EST-012): the shoulder at the robot's force f_ext sits at
+//!    S + c f_ext, the elbow points (psi as measured) read as E − c f_ext
+//!    (f_ext smoothed as the grasp's compliance smooths it), c a fourth
+//!    parameter under the prior [`TRUNK_PRIOR`] of none and S held to the
+//!    posture (weight [`POSTURE_PRIOR`]); the first [`TRUNK_SETTLING`]
+//!    samples after the elbow left the table are left out. c is read out
+//!    when shown (as the play is) and the fit's RMS residual is at most
+//!    [`TRUNK_GAIN`] of the fixed shoulder's: the trunk's circle is then
+//!    the shoulder at rest, l1 and the elbow path's circle, the play 0;
+//!    else c = 0 and the fixed shoulder stands;
 //! 6. the upper-arm phase's evidence pass (RMS residual, arc, and its
 //!    Kåsa moments: the algebraic answer under the measured play) about
-//!    the elbow path's circle.
+//!    the elbow path's circle; under a trunk, of the elbow points read
+//!    less its yield, and the algebraic answer the posture's (|P − E|² =
+//!    2 side l1 (P − E).x, least squares in l1).
 //!
 //! Each Gauss-Newton pass also gives its radius's standard uncertainty
 //! (`PassSums::step`, REQ-EST-008); the last pass of each
@@ -66,13 +86,14 @@
 //! # Bounds
 //! A pass costs about 60 flops (two more per sample with a compliance), one square root and (elbow points) one
 //! sine and cosine per sample, the forearm's evidence and a rhythm pass
-//! one atan2 more; a call does at most `budget` samples (half
-//! of it in a rhythm pass) and one 4 × 4 inverse (the step's, whose
+//! one atan2 more, a trunk pass a smoothed force (22 additions) more; a
+//! call does at most `budget` samples (half
+//! of it in a rhythm or a trunk pass) and one 4 × 4 inverse (the step's, whose
 //! radius element is also the uncertainty's, REQ-EST-008); reading psi's
 //! direction looks at most [`super::play::MAX_TURN`] samples ahead
 //! (comparisons). A whole refinement
 //! is 2 · [`ITERATIONS`] + 5 passes, [`MAX_PASSES`] with a
-//! shoulder-rhythm prior.
+//! shoulder-rhythm prior or a trunk's fit (never both).
 
 use super::circle::{Circle, CircleFitError, ResidualBias, BIAS_BLOCK};
 use super::compliance::{grasp_point, smoothed_force};
@@ -85,6 +106,7 @@ use super::play::PlayReader;
 use super::tilt::PlaneTilt;
 use super::{ArmEstimate, EstimateError, FitEvidence, LengthUncertainty, Method};
 use crate::arm::{elbow_from_grasp, pitch_offset_at};
+use crate::config::ValidationLimits;
 use crate::geometry::{angle_between, Point, Pose};
 use crate::path::PathSample;
 use core::ops::Range;
@@ -103,9 +125,10 @@ pub const ITERATIONS: usize = 5;
 /// limb-verification --bench step`); a refinement is ≈ 950 slices
 /// (≈ 1 s at 1 kHz).
 pub const SAMPLES_PER_STEP: usize = 12;
-/// Passes of a whole refinement with a shoulder-rhythm prior (the most):
-/// the forearm's moments, `ITERATIONS` fits, end and evidence; the upper
-/// arm's moments, `ITERATIONS` fits, `ITERATIONS` rhythm fits and evidence.
+/// Passes of a whole refinement with a shoulder-rhythm prior or a trunk's
+/// fit (the most): the forearm's moments, `ITERATIONS` fits, end and
+/// evidence; the upper arm's moments, `ITERATIONS` fits, `ITERATIONS`
+/// rhythm or trunk fits and evidence.
 pub const MAX_PASSES: usize = 3 * ITERATIONS + 5;
 /// Cauchy scale as a multiple of the previous pass's RMS residual.
 pub const SCALE_MULTIPLE: f64 = 3.0;
@@ -119,8 +142,42 @@ pub const MIN_SCALE: f64 = 0.3e-3;
 pub const PLAY_PRIOR: f64 = 0.04;
 /// Standard uncertainties a measured play must exceed to be read out
 /// (fewer: the path does not show it, and it is taken as none, so that a
-/// path without play is fitted as before, REQ-EST-009).
+/// path without play is fitted as before, REQ-EST-009). A trunk's
+/// compliance is judged the same way (REQ-EST-012).
 pub const PLAY_SIGNIFICANCE: f64 = 3.0;
+/// The trunk compliance's prior in the trunk fits [N²]: no yield,
+/// weighted as one sample whose point a compliance moves under 20 N (the
+/// order of the lift's force), so that it keeps the normal matrix
+/// invertible and pulls a compliance that n samples measure by about 1/n.
+pub const TRUNK_PRIOR: f64 = 400.0;
+/// Weight of the resting posture in the trunk fits (dimensionless: as
+/// many samples): it pins the resting shoulder at the resting elbow's
+/// height and l1 from it along x (the arm flat on the table), to within
+/// a micrometre of what the path alone would say.
+pub const POSTURE_PRIOR: f64 = 1.0e6;
+/// Path samples from the elbow's first departure from rest that the trunk
+/// fits and the evidence under a trunk leave out, with those before it
+/// (1 s at the path's 100 Hz): while the elbow rests, the table carries
+/// most of the robot's force; once the arm comes off it, the trunk takes
+/// the yield the force asks for, a motion the fit does not model. On
+/// `plant.md`'s trunk (900-1 200 N/m) the arm first creeps up with the
+/// shoulder for ≈ 0.5 s, the upper arm barely turning, and the trunk then
+/// settles within ≈ 0.4 s (a critically damped 5 kg); residuals of the
+/// static yield fall below 0.5 mm 0.9 s after the departure.
+pub const TRUNK_SETTLING: usize = 100;
+/// Largest step of the grasp point between two samples read in turn [m]
+/// in a path given a trunk's fit (0.3 m/s at 100 Hz: beyond any motion of
+/// the lift, whose set-point moves at 0.05 m/s; the trunk's own give
+/// stepped at most 1.84 mm on the withheld logs): a path that jumps (a
+/// grasp slip: 4.9-18.6 mm in one sample on the same logs) is no trunk's,
+/// and a trunk's yield explained such a jump as well as a trunk's
+/// (seed 2026: l1 12.8 mm off, accepted).
+pub const MAX_TRUNK_STEP: f64 = 3.0e-3;
+/// Largest ratio of the trunk fit's RMS residual to the fixed shoulder's
+/// at which the trunk's yield is read out: it must explain at least half
+/// of the path's departure from a circle (as the grasp's compliance must,
+/// [`super::compliance`]).
+pub const TRUNK_GAIN: f64 = 0.5;
 
 /// Which pass is running.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -141,6 +198,9 @@ pub enum Pass {
     /// Geometric fit of the upper-arm phase with the shoulder's rhythm
     /// taken out, iteration `0..ITERATIONS`.
     Rhythm(usize),
+    /// Geometric fit of the upper-arm phase with a yielding trunk's
+    /// displacement taken out, iteration `0..ITERATIONS` (REQ-EST-012).
+    Trunk(usize),
     /// Residual and arc of the upper-arm phase.
     UpperArmEvidence,
     /// Finished (or failed).
@@ -150,7 +210,8 @@ pub enum Pass {
 /// Weighted Gauss-Newton sums of one pass, with the evidence of the phase.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 struct PassSums {
-    /// JᵀWJ over (centre x, centre z, radius, play): its upper triangle.
+    /// JᵀWJ over (centre x, centre z, radius, a fourth parameter: the play
+    /// or a trunk's compliance): its upper triangle.
     normal: [[f64; 4]; 4],
     /// JᵀWr.
     gradient: [f64; 4],
@@ -166,9 +227,9 @@ struct PassSums {
 
 impl PassSums {
     /// Adds `point` at its residual from `circle` under Cauchy `scale`;
-    /// `along` is the point's derivative by the play [m/rad] (zero but for
-    /// an upper-arm sample read less a share of the play, in a pass that
-    /// fits it).
+    /// `along` is the point's derivative by the fourth parameter (zero but
+    /// in a pass that fits one: the play [m/rad], for an upper-arm sample
+    /// read less a share of it; a trunk's compliance, −f [N]).
     fn add(&mut self, circle: &Circle, scale: f64, point: Point, along: Point) {
         let dx = point.x - circle.centre.x;
         let dz = point.z - circle.centre.z;
@@ -202,57 +263,71 @@ impl PassSums {
         self.last = point;
     }
 
-    /// One Gauss-Newton step from `circle` and play `play` [rad], with
-    /// the play's prior ([`PLAY_PRIOR`], centred on no play) added: the
-    /// next circle and play, and the radius's standard uncertainty. A play
-    /// the path does not show above its noise (within
-    /// [`PLAY_SIGNIFICANCE`] of its standard uncertainty of 0) is no play:
-    /// w = 0 and the circle's step the least-squares one given it (the
-    /// joint step moved along the play's covariance column, the radius's
-    /// variance conditioned likewise: on a path without play the
-    /// 3-parameter fit's). A pass with no falling sample (every pass but
-    /// the upper arm's fits) leaves the play's row the prior's alone:
-    /// decoupled from the circle.
-    fn step(&self, circle: &Circle, play: f64) -> Result<Step, CircleFitError> {
+    /// One Gauss-Newton step from `circle` and the fourth parameter
+    /// `fourth` (the play [rad], or a trunk's compliance [m/N]), with
+    /// `prior`'s terms added: the next circle and fourth parameter, and the
+    /// radius's standard uncertainty. A fourth parameter the path does not
+    /// show above its noise (within [`PLAY_SIGNIFICANCE`] of its standard
+    /// uncertainty of 0) is none: 0, and the circle's step the
+    /// least-squares one given it (the joint step moved along its
+    /// covariance column, the radius's variance conditioned likewise: on a
+    /// path without it the 3-parameter fit's). A pass in which no sample
+    /// depends on it (every pass but the upper arm's and the trunk's fits)
+    /// leaves its row the prior's alone: decoupled from the circle.
+    fn step(&self, circle: &Circle, fourth: f64, prior: &Prior) -> Result<Step, CircleFitError> {
         let n = &self.normal;
         #[rustfmt::skip]
-        let normal = Matrix4::new(
+        let mut normal = Matrix4::new(
             n[0][0], n[0][1], n[0][2], n[0][3],
             n[0][1], n[1][1], n[1][2], n[1][3],
             n[0][2], n[1][2], n[2][2], n[2][3],
-            n[0][3], n[1][3], n[2][3], n[3][3] + PLAY_PRIOR,
+            n[0][3], n[1][3], n[2][3], n[3][3] + prior.fourth,
         );
-        let c = normal.try_inverse().ok_or(CircleFitError::Degenerate)?;
         let g = &self.gradient;
-        let mut delta = c * -Vector4::new(g[0], g[1], g[2], g[3] + PLAY_PRIOR * play);
-        let mut play = play + delta[3];
+        let mut gradient = Vector4::new(g[0], g[1], g[2], g[3] + prior.fourth * fourth);
+        if let Some(posture) = prior.posture {
+            // Two residuals of weight POSTURE_PRIOR: the shoulder's height
+            // above the resting elbow, cz − E.z, and its distance along x
+            // less l1, cx − side r − E.x (gradients (0, 1, 0, 0) and
+            // (1, 0, −side, 0)).
+            let height = circle.centre.z - posture.elbow.z;
+            let along = circle.centre.x - posture.side * circle.radius - posture.elbow.x;
+            let row = Vector4::new(1.0, 0.0, -posture.side, 0.0);
+            normal += POSTURE_PRIOR * row * row.transpose();
+            normal[(1, 1)] += POSTURE_PRIOR;
+            gradient += POSTURE_PRIOR * along * row;
+            gradient[1] += POSTURE_PRIOR * height;
+        }
+        let c = normal.try_inverse().ok_or(CircleFitError::Degenerate)?;
+        let mut delta = c * -gradient;
+        let mut fourth = fourth + delta[3];
         let mut radius_variance = c[(2, 2)];
         let (white, noise) = self.noise_variance();
         // Judged under the residuals' own variance, not inflated by their
         // correlation: the block means that an unread play leaves
         // correlated would hide the play they show. c[(3, 3)] > 0: the
         // prior keeps the matrix positive definite.
-        let shown = libm::fabs(play) > PLAY_SIGNIFICANCE * libm::sqrt(white * c[(3, 3)]);
+        let shown = libm::fabs(fourth) > PLAY_SIGNIFICANCE * libm::sqrt(white * c[(3, 3)]);
         if !shown {
-            // Minimising over the circle with the play held at 0: the
-            // joint solution moved by C[·,w] / C[w,w] × (0 − w).
-            let along = -play / c[(3, 3)];
+            // Minimising over the circle with the fourth parameter held at
+            // 0: the joint solution moved by C[·,4] / C[4,4] × (0 − p₄).
+            let along = -fourth / c[(3, 3)];
             for k in 0..3 {
                 delta[k] += c[(k, 3)] * along;
             }
             radius_variance -= c[(2, 3)] * c[(2, 3)] / c[(3, 3)];
-            play = 0.0;
+            fourth = 0.0;
         }
         let next = Circle {
             centre: Point::new(circle.centre.x + delta[0], circle.centre.z + delta[1]),
             radius: circle.radius + delta[2],
         };
-        if !(next.is_valid() && play.is_finite()) {
+        if !(next.is_valid() && fourth.is_finite()) {
             return Err(CircleFitError::NonFinite);
         }
         Ok(Step {
             circle: next,
-            play,
+            fourth,
             uncertainty: libm::sqrt(noise * radius_variance),
         })
     }
@@ -308,21 +383,63 @@ const STILL: Point = Point { x: 0.0, z: 0.0 };
 /// How a pass reads one sample.
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Read {
-    /// Its pose (quantizer runs interpolated) and the share of the play
-    /// its psi is read less (`super::play`).
-    Known(Pose, f64),
+    /// Its pose (quantizer runs interpolated), the share of the play its
+    /// psi is read less (`super::play`), and its smoothed force (f_ext.x,
+    /// f_ext.z) [N] where a compliance reads it (else 0).
+    Known(Pose, f64, Point),
     /// Not known within a quantizer's cell (or beyond the path): left out.
     Unread,
     /// An isolated outlier: left out.
     Outlier,
 }
 
+/// When the refinement looks for a yielding trunk (REQ-EST-012): the
+/// validator's limits of the posture that pins the shoulder.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct TrunkGate {
+    /// The fixed shoulder's RMS residual [m] beyond which it is looked for
+    /// (`ValidationLimits::max_residual`).
+    residual: f64,
+    /// Or its residual bias [m] (`ValidationLimits::max_residual_bias`).
+    bias: f64,
+    /// The plausible upper arm [m] (least, most): the fit's start.
+    upper_arm: (f64, f64),
+}
+
+/// The priors of a Gauss-Newton step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Prior {
+    /// The fourth parameter's weight, about none ([`PLAY_PRIOR`] for the
+    /// play, [`TRUNK_PRIOR`] for a trunk's compliance).
+    fourth: f64,
+    /// Where the arm's resting posture pins the shoulder (the trunk fits),
+    /// weighted [`POSTURE_PRIOR`].
+    posture: Option<Posture>,
+}
+
+/// The resting posture of an arm flat on the table: the shoulder at rest
+/// lies at the resting elbow's height, l1 from it along x.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Posture {
+    /// The resting elbow [m], frame S.
+    elbow: Point,
+    /// The side of the elbow the shoulder lies on: +1 (along +x) or −1.
+    side: f64,
+}
+
+/// The play's prior (no posture: the circle is free).
+const PLAY: Prior = Prior {
+    fourth: PLAY_PRIOR,
+    posture: None,
+};
+
 /// One Gauss-Newton step's outcome.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Step {
     circle: Circle,
-    /// The play after the step [rad].
-    play: f64,
+    /// The fourth parameter after the step: the play [rad], or a trunk's
+    /// compliance [m/N].
+    fourth: f64,
     /// The standard uncertainty of the radius the pass measured [m].
     uncertainty: f64,
 }
@@ -366,6 +483,35 @@ pub struct Refinement {
     play: f64,
     /// Follows psi's direction along the running upper-arm pass.
     direction: PlayReader,
+    /// Where the arm's resting posture pins the shoulder
+    /// (`ValidationLimits::pins_resting_shoulder`), when a yielding trunk
+    /// is looked for (REQ-EST-012); `None`: never.
+    trunk_gate: Option<TrunkGate>,
+    /// The fixed shoulder's (RMS residual, residual bias) [m] in the last
+    /// upper-arm fit.
+    fixed_fit: (f64, f64),
+    /// The first upper-arm sample whose elbow point has left the resting
+    /// elbow by more than the forearm's end tolerance: the elbow off the
+    /// table.
+    elbow_lift: Option<usize>,
+    /// The last grasp point the lift's passes read (the forearm's
+    /// evidence, then the upper arm's moments: the whole lift in order),
+    /// and the square of the largest step between two read in turn [m²].
+    largest_step: (Option<Point>, f64),
+    /// The side of the resting elbow away from the resting grasp, where a
+    /// resting posture puts the shoulder: ±1 along x (0 until the
+    /// forearm's evidence pass has seen a grasp point).
+    posture_side: f64,
+    /// Under a trunk, the evidence pass's sums of the posture's algebraic
+    /// answer: Σ |P − E|² (P − E).x [m³] and Σ ((P − E).x)² [m²] over the
+    /// elbow points P read less the trunk's yield, E the resting elbow.
+    posture_sums: [f64; 2],
+    /// The trunk fits' circle: the resting shoulder and l1.
+    trunk_circle: Circle,
+    /// A yielding trunk's compliance [m/N] (REQ-EST-012): the shoulder at
+    /// the robot's force f_ext sits at S + c f_ext, so every later pass
+    /// reads an elbow point E as E − c f_ext; 0: a fixed shoulder.
+    trunk: f64,
     pitch_offset: f64,
     /// Isolated outliers left out of (the forearm, the upper-arm) phase.
     outliers: (usize, usize),
@@ -390,19 +536,23 @@ pub struct Refinement {
 
 impl Refinement {
     /// A refinement of the forearm phase `forearm` and the upper-arm phase
-    /// from `forearm.end` to `path_len`; `rhythm` is the shoulder-rhythm
-    /// prior [m/rad] (`ValidationLimits::shoulder_rhythm`; non-finite
-    /// components count as 0), `compliance` the grasp's [m/N] (non-finite:
-    /// 0), `tilt_slope` the slope tan θ of the arm's plane the path was
-    /// recorded in ([`super::tilt::PlaneTilt::slope`], reported; non-finite:
-    /// 0).
+    /// from `forearm.end` to `path_len` under the validator's limits
+    /// `prior`: its shoulder-rhythm prior [m/rad]
+    /// (`ValidationLimits::shoulder_rhythm`; non-finite components count
+    /// as 0), and whether its posture pins the resting shoulder's height
+    /// (then a fixed shoulder beyond its residual limits is given a
+    /// yielding trunk's fit, REQ-EST-012); `compliance` the grasp's [m/N]
+    /// (non-finite: 0), `tilt_slope` the slope tan θ of the arm's plane the
+    /// path was recorded in ([`super::tilt::PlaneTilt::slope`], reported;
+    /// non-finite: 0).
     pub fn new(
         forearm: Range<usize>,
         path_len: usize,
-        rhythm: [f64; 2],
+        prior: &ValidationLimits,
         compliance: f64,
         tilt_slope: f64,
     ) -> Self {
+        let rhythm = prior.shoulder_rhythm;
         let tilt_slope = if tilt_slope.is_finite() {
             tilt_slope
         } else {
@@ -433,6 +583,18 @@ impl Refinement {
             uncertainty: (f64::NAN, f64::NAN),
             play: 0.0,
             direction: PlayReader::new(),
+            trunk_gate: prior.pins_resting_shoulder().then_some(TrunkGate {
+                residual: prior.max_residual,
+                bias: prior.max_residual_bias,
+                upper_arm: (prior.min_upper_arm_length, prior.max_upper_arm_length),
+            }),
+            fixed_fit: (0.0, 0.0),
+            elbow_lift: None,
+            largest_step: (None, 0.0),
+            posture_side: 0.0,
+            posture_sums: [0.0, 0.0],
+            trunk_circle: unset,
+            trunk: 0.0,
             pitch_offset: 0.0,
             outliers: (0, 0),
             reader: Dequantizer::new(),
@@ -450,13 +612,13 @@ impl Refinement {
     }
 
     /// The refinement of `online`'s estimate over a path of `path_len`
-    /// samples, once its upper-arm phase has begun, under shoulder-rhythm
-    /// prior `rhythm` [m/rad], the path recorded in the arm's plane of
-    /// `tilt` ([`Refinement::new`]); `None` before.
+    /// samples, once its upper-arm phase has begun, under the validator's
+    /// limits `prior`, the path recorded in the arm's plane of `tilt`
+    /// ([`Refinement::new`]); `None` before.
     pub fn after(
         online: &OnlineEstimator,
         path_len: usize,
-        rhythm: [f64; 2],
+        prior: &ValidationLimits,
         tilt: &PlaneTilt,
     ) -> Option<Self> {
         online.forearm()?;
@@ -465,7 +627,7 @@ impl Refinement {
             Self::new(
                 lift..forearm_end,
                 path_len,
-                rhythm,
+                prior,
                 online.compliance(),
                 tilt.slope(),
             )
@@ -490,13 +652,15 @@ impl Refinement {
             Pass::UpperArmMoments
             | Pass::UpperArm(_)
             | Pass::Rhythm(_)
+            | Pass::Trunk(_)
             | Pass::UpperArmEvidence => span(self.upper_arm_range),
             Pass::Done => return self.finish(Err(EstimateError::UpperArmPhaseTooShort)),
         };
-        // A rhythm sample costs an elbow point and an atan2 more: half the
-        // budget keeps the step's cost below the elbow passes'.
+        // A rhythm sample costs an elbow point and an atan2 more, a trunk
+        // sample an elbow point and a smoothed force: half the budget keeps
+        // the step's cost below the elbow passes'.
         let budget = match self.pass {
-            Pass::Rhythm(_) => budget.div_ceil(2),
+            Pass::Rhythm(_) | Pass::Trunk(_) => budget.div_ceil(2),
             _ => budget,
         };
         let start = range.start.saturating_add(self.cursor);
@@ -505,8 +669,8 @@ impl Refinement {
             if index >= path.len() {
                 return self.finish(Err(EstimateError::PathTooLong));
             }
-            let (pose, share) = match self.read(path, index) {
-                Read::Known(pose, share) => (pose, share),
+            let (pose, share, force) = match self.read(path, index) {
+                Read::Known(pose, share, force) => (pose, share, force),
                 left_out => {
                     // Counted once per phase, in its evidence pass.
                     let count = match left_out {
@@ -536,13 +700,21 @@ impl Refinement {
                     }
                 }
                 Pass::ForearmEvidence => {
+                    self.track_step(pose.point());
                     self.sums
                         .add(&self.forearm, f64::INFINITY, pose.point(), STILL);
                     self.moments.add(pose.point());
                     self.sums.pitch_offsets += pitch_offset_at(pose, self.forearm.centre);
                 }
                 Pass::UpperArmMoments => {
-                    self.moments.add(self.elbow(pose, share).0);
+                    self.track_step(pose.point());
+                    let elbow = self.elbow(pose, share).0;
+                    if self.elbow_lift.is_none()
+                        && elbow.distance(self.forearm.centre) > self.end_tolerance
+                    {
+                        self.elbow_lift = Some(index);
+                    }
+                    self.moments.add(elbow);
                 }
                 Pass::UpperArm(_) => {
                     let (elbow, along) = self.elbow(pose, share);
@@ -552,10 +724,23 @@ impl Refinement {
                     let elbow = self.without_rhythm(self.elbow(pose, share).0);
                     self.sums.add(&self.rest, self.scale, elbow, STILL);
                 }
+                Pass::Trunk(_) => {
+                    // psi as measured: the play the fixed shoulder's fits
+                    // measured is that wrong model's.
+                    let point = self.without_trunk(self.elbow(pose, 0.0).0, force);
+                    let along = Point::new(-force.x, -force.z);
+                    self.sums.add(&self.trunk_circle, self.scale, point, along);
+                }
                 Pass::UpperArmEvidence => {
-                    let elbow = self.elbow(pose, share).0;
+                    let elbow = self.without_trunk(self.elbow(pose, share).0, force);
                     self.sums.add(&self.upper_arm, f64::INFINITY, elbow, STILL);
                     self.moments.add(elbow);
+                    if self.trunk != 0.0 {
+                        let posture = self.posture();
+                        let (dx, dz) = (elbow.x - posture.elbow.x, elbow.z - posture.elbow.z);
+                        self.posture_sums[0] += (dx * dx + dz * dz) * dx;
+                        self.posture_sums[1] += dx * dx;
+                    }
                 }
                 Pass::Done => {}
             }
@@ -597,7 +782,7 @@ impl Refinement {
             }
             Pass::Forearm(iteration) => {
                 let step = self
-                    .gauss_newton(self.forearm)
+                    .gauss_newton(self.forearm, self.play, &PLAY)
                     .map_err(EstimateError::ForearmFit)?;
                 (self.forearm, self.uncertainty.0) = (step.circle, step.uncertainty);
                 if iteration + 1 < ITERATIONS {
@@ -630,28 +815,90 @@ impl Refinement {
                 Pass::UpperArm(0)
             }
             Pass::UpperArm(iteration) => {
+                // The fixed shoulder's fit as this pass met it.
+                self.fixed_fit = (self.sums.rms(), self.sums.bias.worst());
                 let step = self
-                    .gauss_newton(self.upper_arm)
+                    .gauss_newton(self.upper_arm, self.play, &PLAY)
                     .map_err(EstimateError::UpperArmFit)?;
                 (self.upper_arm, self.uncertainty.1) = (step.circle, step.uncertainty);
-                self.play = step.play;
+                self.play = step.fourth;
                 if iteration + 1 < ITERATIONS {
                     Pass::UpperArm(iteration + 1)
                 } else {
                     self.rest = self.upper_arm;
-                    if self.rhythm == [0.0, 0.0] {
-                        Pass::UpperArmEvidence
-                    } else {
+                    if self.rhythm != [0.0, 0.0] {
                         // The elbow points move by up to φ ρ from the
                         // path's circle: no Cauchy scale from its fit.
                         self.scale = f64::INFINITY;
                         Pass::Rhythm(0)
+                    } else if let (Some(gate), true) = (
+                        self.trunk_gate,
+                        self.posture_side != 0.0
+                            && self.largest_step.1 <= MAX_TRUNK_STEP * MAX_TRUNK_STEP,
+                    ) {
+                        if self.fixed_fit.0 > gate.residual || self.fixed_fit.1 > gate.bias {
+                            // A fixed shoulder does not explain the path:
+                            // the trunk's fit starts from the posture, the
+                            // shoulder on the side of the resting elbow away
+                            // from the grasp, l1 the fixed circle's where
+                            // plausible (a short lift's can be any), else
+                            // the plausible range's middle.
+                            let Posture { elbow, side } = self.posture();
+                            let (least, most) = gate.upper_arm;
+                            let radius = if (least..=most).contains(&self.upper_arm.radius) {
+                                self.upper_arm.radius
+                            } else {
+                                0.5 * (least + most)
+                            };
+                            self.trunk_circle = Circle {
+                                centre: Point::new(elbow.x + side * radius, elbow.z),
+                                radius,
+                            };
+                            self.scale = f64::INFINITY;
+                            Pass::Trunk(0)
+                        } else {
+                            Pass::UpperArmEvidence
+                        }
+                    } else {
+                        Pass::UpperArmEvidence
                     }
+                }
+            }
+            Pass::Trunk(iteration) => {
+                let prior = Prior {
+                    fourth: TRUNK_PRIOR,
+                    posture: Some(self.posture()),
+                };
+                let rms = self.sums.rms();
+                let Ok(step) = self.gauss_newton(self.trunk_circle, self.trunk, &prior) else {
+                    // A fit that fails is no trunk's: the fixed shoulder
+                    // stands, and its own evidence judges it.
+                    self.trunk = 0.0;
+                    return Ok(Pass::UpperArmEvidence);
+                };
+                (self.trunk_circle, self.trunk) = (step.circle, step.fourth);
+                if iteration + 1 < ITERATIONS {
+                    Pass::Trunk(iteration + 1)
+                } else {
+                    // Read out only where shown and explaining at least
+                    // half of the fixed shoulder's departure: then the
+                    // trunk's circle is the shoulder at rest and the
+                    // elbow's path in the trunk's frame; else the fixed
+                    // shoulder stands, and the evidence refuses it.
+                    if self.trunk != 0.0 && rms <= TRUNK_GAIN * self.fixed_fit.0 {
+                        self.upper_arm = self.trunk_circle;
+                        self.rest = self.trunk_circle;
+                        self.uncertainty.1 = step.uncertainty;
+                        self.play = 0.0;
+                    } else {
+                        self.trunk = 0.0;
+                    }
+                    Pass::UpperArmEvidence
                 }
             }
             Pass::Rhythm(iteration) => {
                 let step = self
-                    .gauss_newton(self.rest)
+                    .gauss_newton(self.rest, self.play, &PLAY)
                     .map_err(EstimateError::UpperArmFit)?;
                 (self.rest, self.uncertainty.1) = (step.circle, step.uncertainty);
                 if iteration + 1 < ITERATIONS {
@@ -669,6 +916,11 @@ impl Refinement {
                     .circle;
                 self.moments = CircleMoments::new();
                 self.forearm_evidence = (self.phase_arc(&self.forearm), self.sums.rms());
+                self.posture_side = match self.sums.first {
+                    Some(grasp) if self.forearm.centre.x < grasp.x => -1.0,
+                    Some(_) => 1.0,
+                    None => 0.0,
+                };
                 self.forearm_bias = self.sums.bias.worst();
                 // count ≥ 1: the pass had at least MIN_PHASE_SAMPLES samples
                 // and an all-outlier phase leaves the mean at 0.
@@ -680,12 +932,26 @@ impl Refinement {
             }
             Pass::UpperArmEvidence => {
                 // The algebraic answer over the elbow points as read with
-                // the play the fits measured.
-                self.upper_arm_kasa = self
-                    .moments
-                    .fit()
-                    .map_err(EstimateError::UpperArmFit)?
-                    .circle;
+                // the play the fits measured; under a trunk, under the
+                // posture the trunk's fits hold (the shoulder S at the
+                // resting elbow's height, l1 from it along x: |P − E|² =
+                // 2 side l1 (P − E).x, least squares in l1).
+                self.upper_arm_kasa = if self.trunk != 0.0 {
+                    let posture = self.posture();
+                    let radius = self.posture_sums[0] / (2.0 * posture.side * self.posture_sums[1]);
+                    Circle {
+                        centre: Point::new(
+                            posture.elbow.x + posture.side * radius,
+                            posture.elbow.z,
+                        ),
+                        radius,
+                    }
+                } else {
+                    self.moments
+                        .fit()
+                        .map_err(EstimateError::UpperArmFit)?
+                        .circle
+                };
                 let estimate = self.estimate(
                     self.phase_arc(&self.upper_arm),
                     self.sums.rms(),
@@ -710,29 +976,52 @@ impl Refinement {
         if is_isolated_outlier(path, index) {
             return Read::Outlier;
         }
-        // The grasp point under the measured compliance (none found: the
-        // pose as read).
-        if self.compliance != 0.0 {
+        // The force, where a compliance reads the sample through it: the
+        // grasp's, or a trunk's in its fits and after them (none needed:
+        // not read, and 0).
+        let trunk = matches!(self.pass, Pass::Trunk(_))
+            || (self.trunk != 0.0 && self.pass == Pass::UpperArmEvidence);
+        // A trunk settles after the elbow leaves the table, which carried
+        // the force until then: not modelled, left out.
+        let lift = self.elbow_lift.unwrap_or(self.upper_arm_range.0);
+        if trunk && index < lift.saturating_add(TRUNK_SETTLING) {
+            return Read::Unread;
+        }
+        let force = if self.compliance != 0.0 || trunk {
             let Some(force) = smoothed_force(path, index) else {
                 return Read::Unread;
             };
+            force
+        } else {
+            STILL
+        };
+        // The grasp point under the measured compliance (none found: the
+        // pose as read).
+        if self.compliance != 0.0 {
             pose = grasp_point(pose, self.compliance, force);
         }
         let share = match self.pass {
             Pass::UpperArmMoments
             | Pass::UpperArm(_)
             | Pass::Rhythm(_)
+            | Pass::Trunk(_)
             | Pass::UpperArmEvidence => self.direction.read(path, index),
             _ => Some(0.0),
         };
-        share.map_or(Read::Unread, |share| Read::Known(pose, share))
+        share.map_or(Read::Unread, |share| Read::Known(pose, share, force))
     }
 
     /// The Gauss-Newton step of the pass just summed from `circle` and the
-    /// current play (which only the upper arm's fits take from it); the
+    /// fourth parameter `fourth` under `prior` (only the upper arm's fits
+    /// take the play from it, the trunk's fits the trunk's compliance); the
     /// next pass's Cauchy scale from its weighted RMS residual.
-    fn gauss_newton(&mut self, circle: Circle) -> Result<Step, CircleFitError> {
-        let step = self.sums.step(&circle, self.play)?;
+    fn gauss_newton(
+        &mut self,
+        circle: Circle,
+        fourth: f64,
+        prior: &Prior,
+    ) -> Result<Step, CircleFitError> {
+        let step = self.sums.step(&circle, fourth, prior)?;
         self.scale = (SCALE_MULTIPLE * self.sums.weighted_rms()).max(MIN_SCALE);
         Ok(step)
     }
@@ -781,6 +1070,7 @@ impl Refinement {
                 }),
                 play: Some(self.play),
                 compliance: Some(self.compliance),
+                trunk_compliance: Some(self.trunk),
                 plane_tilt: Some(libm::atan(self.tilt_slope)),
                 resolution: {
                     let step = self.reader.resolution();
@@ -814,6 +1104,41 @@ impl Refinement {
         let (rx, rz) = (along * ex + rise * dx, along * ez + rise * dz);
         let angle = libm::atan2(vx * dx + vz * dz, vx * ex + vz * ez);
         Point::new(elbow.x - angle * rx, elbow.z - angle * rz)
+    }
+
+    /// The resting posture the trunk fits hold: the refined resting elbow,
+    /// the shoulder on [`Refinement::posture_side`].
+    fn posture(&self) -> Posture {
+        Posture {
+            elbow: self.forearm.centre,
+            side: self.posture_side,
+        }
+    }
+
+    /// Tracks the largest step of the grasp point between the samples the
+    /// lift's passes read in turn, squared (no square root per sample: the
+    /// firmware's slices; a non-finite step counts as infinite).
+    fn track_step(&mut self, point: Point) {
+        if let Some(last) = self.largest_step.0 {
+            let (dx, dz) = (point.x - last.x, point.z - last.z);
+            let step = dx * dx + dz * dz;
+            self.largest_step.1 = if step.is_nan() {
+                f64::INFINITY
+            } else {
+                self.largest_step.1.max(step)
+            };
+        }
+        self.largest_step.0 = Some(point);
+    }
+
+    /// `elbow` read less a yielding trunk's displacement under the robot's
+    /// force `force` (f_ext.x, f_ext.z) [N]: E − c f_ext, c the trunk's
+    /// compliance (0: `elbow` itself).
+    fn without_trunk(&self, elbow: Point, force: Point) -> Point {
+        Point::new(
+            elbow.x - self.trunk * force.x,
+            elbow.z - self.trunk * force.z,
+        )
     }
 
     /// The elbow of a grasp at `pose` whose psi is read less `share` ×
@@ -894,7 +1219,7 @@ mod tests {
             for point in points.clone() {
                 sums.add(&circle, f64::INFINITY, point, STILL);
             }
-            circle = sums.step(&circle, 0.0).expect("a step").circle;
+            circle = sums.step(&circle, 0.0, &PLAY).expect("a step").circle;
             let after = error(&circle);
             assert!(
                 after <= 10.0 * before * before + 1e-15,
@@ -948,7 +1273,7 @@ mod tests {
                 for &point in &points {
                     sums.add(&circle, scale, point, STILL);
                 }
-                let step = sums.step(&circle, 0.0).expect("a step");
+                let step = sums.step(&circle, 0.0, &PLAY).expect("a step");
                 (circle, last) = (step.circle, step.uncertainty);
                 scale = (SCALE_MULTIPLE * sums.weighted_rms()).max(MIN_SCALE);
             }
