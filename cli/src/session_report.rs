@@ -98,6 +98,10 @@ pub struct ModelReport {
     /// [m/N].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub trunk_compliance: Option<f64>,
+    /// The grasp's slide along the forearm the estimator measured at a
+    /// slip and read out [m].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub grasp_slip: Option<f64>,
     /// The tilt of the arm's plane the estimator read the heights in [rad].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub plane_tilt: Option<f64>,
@@ -315,6 +319,7 @@ fn model_report(model: &FittedModel, truth: &TruthReport) -> ModelReport {
         play: model.play,
         compliance: model.compliance,
         trunk_compliance: model.trunk_compliance,
+        grasp_slip: model.grasp_slip,
         plane_tilt: model.plane_tilt,
     }
 }

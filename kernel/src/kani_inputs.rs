@@ -160,6 +160,7 @@ pub(crate) fn validated_arm() -> ValidatedArm {
             play: None,
             compliance: None,
             trunk_compliance: None,
+            grasp_slip: None,
             plane_tilt: None,
         },
     };

@@ -523,6 +523,7 @@ mod verification {
                 play: None,
                 compliance: None,
                 trunk_compliance: None,
+                grasp_slip: None,
                 plane_tilt: None,
             },
         };

@@ -82,6 +82,10 @@ pub struct FittedModel {
     /// [m/N] (`limb_kernel::estimation::FitEvidence::trunk_compliance`);
     /// `None` when the method does not measure it.
     pub trunk_compliance: Option<f64>,
+    /// The grasp's slide along the forearm the estimator measured at a
+    /// slip and read out [m] (`limb_kernel::estimation::FitEvidence::
+    /// grasp_slip`); `None` when the method does not measure it.
+    pub grasp_slip: Option<f64>,
     /// The tilt of the arm's plane the estimator read the heights in [rad]
     /// (`limb_kernel::estimation::FitEvidence::plane_tilt`); `None` when
     /// the method does not measure it.
@@ -101,6 +105,7 @@ impl FittedModel {
             play: estimate.evidence.play,
             compliance: estimate.evidence.compliance,
             trunk_compliance: estimate.evidence.trunk_compliance,
+            grasp_slip: estimate.evidence.grasp_slip,
             plane_tilt: estimate.evidence.plane_tilt,
         }
     }

@@ -90,6 +90,7 @@ fn estimate(
             play: None,
             compliance: None,
             trunk_compliance: None,
+            grasp_slip: None,
             plane_tilt: None,
         },
     }
@@ -161,6 +162,7 @@ fn req_val_001_a_consistent_estimate_is_accepted() {
             play: None,
             compliance: None,
             trunk_compliance: None,
+            grasp_slip: None,
             plane_tilt: None,
         },
     };

@@ -123,6 +123,11 @@ pub struct FitEvidence {
     /// a fixed shoulder, or a yield not looked for or not shown); `None`
     /// for the methods other than [`Method::Online`].
     pub trunk_compliance: Option<f64>,
+    /// The grasp's slide along the forearm [m] the fits measured at a jump
+    /// of the path and read out (`refine`, REQ-EST-013; positive: away
+    /// from the elbow; 0: none); the estimate is the arm held after it.
+    /// `None` for the methods other than [`Method::Online`].
+    pub grasp_slip: Option<f64>,
     /// The tilt of the arm's plane about x the lateral channel showed and
     /// the heights were read in [rad] ([`tilt`]; 0: a vertical plane, or
     /// a tilt not shown); `None` for the methods other than
@@ -430,6 +435,7 @@ pub fn estimate_arm(path: &[PathSample], method: Method) -> Result<ArmEstimate, 
             play: None,
             compliance: None,
             trunk_compliance: None,
+            grasp_slip: None,
             plane_tilt: None,
         },
     })

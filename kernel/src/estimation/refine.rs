@@ -11,7 +11,23 @@
 //! [`super::tilt`]), and each grasp point G read
 //! as G + c f_ext under the grasp's compliance c the online estimate
 //! measured over the forearm phase ([`super::compliance`]; 0 for a rigid
-//! grasp, and the samples are read as recorded):
+//! grasp, and the samples are read as recorded).
+//!
+//! **A grasp slip** (REQ-EST-013): the moments passes (steps 0 and 3)
+//! track the largest lasting step of the grasp point between consecutive
+//! samples; one step beyond [`JUMP`] (and twice the sensor's resolution)
+//! is a slip at that sample, and from it on every pass reads a grasp point
+//! G as G + s (d − side x̂), the grasp of the arm before the slip (d the
+//! unit vector from the grasp to the elbow, x̂ S's x axis on the side of
+//! the resting elbow away from the resting grasp: the shared truth's slip,
+//! the arm with l2 + s moved by s along x). The slide s is the fourth
+//! Gauss-Newton parameter (prior [`SLIP_PRIOR`], no Cauchy weights) of
+//! the forearm fits when the jump lies in the forearm's range and of the
+//! upper arm's fits (no play then; the shoulder held to the resting
+//! posture where the limits pin it, as in the trunk's fits); the estimate
+//! is the arm held after the slip: l2 + s, its elbow and shoulder moved
+//! by s along x. Two jumps or more (a stretch thrown off and back) are no
+//! slip:
 //! 0. one pass of Kåsa moments of the forearm phase's grasp points (the
 //!    start of step 1);
 //! 1. [`ITERATIONS`] Gauss-Newton passes of the geometric circle fit
@@ -52,7 +68,7 @@
 //!    along x), no rhythm prior is given, the fixed shoulder's last fit
 //!    leaves an RMS residual or a residual bias beyond the validator's
 //!    limits, and no grasp point of the lift stepped more than
-//!    [`MAX_TRUNK_STEP`] from the one before (a slip), instead
+//!    [`JUMP`] from the one before (a slip), instead
 //!    [`ITERATIONS`] Gauss-Newton passes fit a **yielding trunk**
 //!    (REQ-EST-012): the shoulder at the robot's force f_ext sits at
 //!    S + c f_ext, the elbow points (psi as measured) read as E − c f_ext
@@ -165,14 +181,22 @@ pub const POSTURE_PRIOR: f64 = 1.0e6;
 /// settles within ≈ 0.4 s (a critically damped 5 kg); residuals of the
 /// static yield fall below 0.5 mm 0.9 s after the departure.
 pub const TRUNK_SETTLING: usize = 100;
-/// Largest step of the grasp point between two samples read in turn [m]
-/// in a path given a trunk's fit (0.3 m/s at 100 Hz: beyond any motion of
+/// Largest lasting step of the grasp point between two consecutive
+/// samples that is motion [m] (0.3 m/s at 100 Hz: beyond any motion of
 /// the lift, whose set-point moves at 0.05 m/s; the trunk's own give
-/// stepped at most 1.84 mm on the withheld logs): a path that jumps (a
-/// grasp slip: 4.9-18.6 mm in one sample on the same logs) is no trunk's,
-/// and a trunk's yield explained such a jump as well as a trunk's
-/// (seed 2026: l1 12.8 mm off, accepted).
-pub const MAX_TRUNK_STEP: f64 = 3.0e-3;
+/// stepped at most 1.84 mm on the withheld logs); one step beyond it is a
+/// jump, a grasp slip (4.9-18.6 mm in one sample on the same logs),
+/// REQ-EST-013. A path that jumps is never given a trunk's fit: a trunk's
+/// yield explained a slip's jump as well as a trunk's (seed 2026: l1
+/// 12.8 mm off, accepted) before this bound.
+pub const JUMP: f64 = 3.0e-3;
+/// The slide's prior in the slip fits [dimensionless]: no slide, as a
+/// millionth of a sample: it keeps the normal matrix invertible and pulls
+/// no measured slide (weighted as one sample, it pulled the slide of a
+/// late slip 8 % short: over the short arc after the jump the slide trades
+/// off against l1, and little of the samples' evidence is the slide's
+/// own).
+pub const SLIP_PRIOR: f64 = 1.0e-6;
 /// Largest ratio of the trunk fit's RMS residual to the fixed shoulder's
 /// at which the trunk's yield is read out: it must explain at least half
 /// of the path's departure from a circle (as the grasp's compliance must,
@@ -393,6 +417,100 @@ enum Read {
     Outlier,
 }
 
+/// The largest lasting step of the grasp point between samples the
+/// lift's passes read in turn (the forearm's moments, then the upper
+/// arm's: the whole lift in order, each sample once). A step lasts when
+/// the sample after it is as far from the one before it: an isolated
+/// spike the outlier test let through comes back and is no jump.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct JumpTracker {
+    /// The first grasp point's x [m] (NaN: none read yet).
+    first_x: f64,
+    /// The last two consecutive grasp points read [m] (the older first;
+    /// `held` of them valid, the newest last).
+    recent: [Point; 2],
+    held: u8,
+    /// Lasting steps beyond [`JUMP`].
+    jumps: u8,
+    /// The sample of the last point, the sample after the largest step
+    /// (where a jump starts) and the next sample not yet tracked (path
+    /// indices, below `PATH_CAPACITY`).
+    last_index: u32,
+    at: u32,
+    next: u32,
+    /// The largest lasting step's square [m²] (a non-finite one:
+    /// infinite).
+    largest: f64,
+}
+
+impl JumpTracker {
+    const fn new() -> Self {
+        Self {
+            first_x: f64::NAN,
+            recent: [STILL, STILL],
+            held: 0,
+            jumps: 0,
+            last_index: 0,
+            at: 0,
+            next: 0,
+            largest: 0.0,
+        }
+    }
+
+    /// Tracks `point`, read at `path[index]`, unless a sample at or after
+    /// it was tracked already: the step into the last sample, as far as
+    /// `point` keeps it.
+    fn track(&mut self, index: usize, point: Point) {
+        let index = u32::try_from(index).unwrap_or(u32::MAX);
+        if index < self.next {
+            return;
+        }
+        self.next = index.saturating_add(1);
+        // Across a sample left out (an outlier, a quantizer's unknown
+        // reading) the path's own motion adds up: only consecutive
+        // samples are compared.
+        if index != self.last_index.saturating_add(1) {
+            self.held = 0;
+        }
+        if self.held == 2 {
+            let [before, last] = self.recent;
+            let square = |a: Point, b: Point| {
+                let (dx, dz) = (a.x - b.x, a.z - b.z);
+                dx * dx + dz * dz
+            };
+            let (into, kept) = (square(last, before), square(point, before));
+            let nan = into.is_nan() || kept.is_nan();
+            let step = into.min(kept);
+            if nan || step > JUMP * JUMP {
+                self.jumps = self.jumps.saturating_add(1);
+            }
+            if nan || step > self.largest {
+                self.largest = if nan { f64::INFINITY } else { step };
+                self.at = self.last_index;
+            }
+        }
+        if self.first_x.is_nan() {
+            self.first_x = point.x;
+        }
+        self.recent = [self.recent[1], point];
+        self.held = (self.held + 1).min(2);
+        self.last_index = index;
+    }
+
+    /// Whether the lift jumped once: one lasting step beyond [`JUMP`], and
+    /// beyond twice the sensor's `resolution` [m] (a quantizer's step is
+    /// no slip; a stretch thrown off and back is two steps).
+    fn slipped(&self, resolution: f64) -> bool {
+        let least = JUMP.max(2.0 * resolution);
+        self.jumps == 1 && self.largest > least * least
+    }
+
+    /// The sample where the jump starts.
+    fn at(&self) -> usize {
+        self.at as usize
+    }
+}
+
 /// When the refinement looks for a yielding trunk (REQ-EST-012): the
 /// validator's limits of the posture that pins the shoulder.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -426,6 +544,12 @@ struct Posture {
     /// The side of the elbow the shoulder lies on: +1 (along +x) or −1.
     side: f64,
 }
+
+/// The slip's prior (no posture): no slide ([`SLIP_PRIOR`]).
+const SLIP: Prior = Prior {
+    fourth: SLIP_PRIOR,
+    posture: None,
+};
 
 /// The play's prior (no posture: the circle is free).
 const PLAY: Prior = Prior {
@@ -497,7 +621,12 @@ pub struct Refinement {
     /// The last grasp point the lift's passes read (the forearm's
     /// evidence, then the upper arm's moments: the whole lift in order),
     /// and the square of the largest step between two read in turn [m²].
-    largest_step: (Option<Point>, f64),
+    jumps: JumpTracker,
+    /// The grasp's slide along the forearm [m] the fits measured (a grasp
+    /// slip at `jumps.at`, REQ-EST-013): from that sample on, every pass
+    /// reads a grasp point G as G + s (d − side x̂), the grasp of the arm
+    /// before the slip; 0: none.
+    slip: f64,
     /// The side of the resting elbow away from the resting grasp, where a
     /// resting posture puts the shoulder: ±1 along x (0 until the
     /// forearm's evidence pass has seen a grasp point).
@@ -590,7 +719,8 @@ impl Refinement {
             }),
             fixed_fit: (0.0, 0.0),
             elbow_lift: None,
-            largest_step: (None, 0.0),
+            jumps: JumpTracker::new(),
+            slip: 0.0,
             posture_side: 0.0,
             posture_sums: [0.0, 0.0],
             trunk_circle: unset,
@@ -687,12 +817,15 @@ impl Refinement {
             };
             match self.pass {
                 Pass::ForearmMoments => {
+                    self.jumps.track(index, pose.point());
                     // A non-finite point is left out of the moments.
                     self.moments.add(pose.point());
                 }
-                Pass::Forearm(_) => self
-                    .sums
-                    .add(&self.forearm, self.scale, pose.point(), STILL),
+                Pass::Forearm(_) => {
+                    let along = self.slip_along(index, pose);
+                    self.sums
+                        .add(&self.forearm, self.scale, pose.point(), along);
+                }
                 Pass::ForearmEnd => {
                     let residual = pose.point().distance(self.forearm.centre) - self.forearm.radius;
                     if libm::fabs(residual) <= self.end_tolerance {
@@ -700,14 +833,13 @@ impl Refinement {
                     }
                 }
                 Pass::ForearmEvidence => {
-                    self.track_step(pose.point());
                     self.sums
                         .add(&self.forearm, f64::INFINITY, pose.point(), STILL);
                     self.moments.add(pose.point());
                     self.sums.pitch_offsets += pitch_offset_at(pose, self.forearm.centre);
                 }
                 Pass::UpperArmMoments => {
-                    self.track_step(pose.point());
+                    self.jumps.track(index, pose.point());
                     let elbow = self.elbow(pose, share).0;
                     if self.elbow_lift.is_none()
                         && elbow.distance(self.forearm.centre) > self.end_tolerance
@@ -717,7 +849,13 @@ impl Refinement {
                     self.moments.add(elbow);
                 }
                 Pass::UpperArm(_) => {
-                    let (elbow, along) = self.elbow(pose, share);
+                    let (elbow, along) = if self.slipped() {
+                        // A slip's slide, not the play, is the fourth
+                        // parameter (psi as measured).
+                        (self.elbow(pose, 0.0).0, self.slip_along(index, pose))
+                    } else {
+                        self.elbow(pose, share)
+                    };
                     self.sums.add(&self.upper_arm, self.scale, elbow, along);
                 }
                 Pass::Rhythm(_) => {
@@ -778,13 +916,31 @@ impl Refinement {
                 let fit = self.moments.fit().map_err(EstimateError::ForearmFit)?;
                 self.moments = CircleMoments::new();
                 self.forearm = fit.circle;
+                // The resting posture's side: the resting elbow's, away
+                // from the resting grasp.
+                let first = self.jumps.first_x;
+                self.posture_side = if first.is_nan() {
+                    0.0
+                } else if self.forearm.centre.x < first {
+                    -1.0
+                } else {
+                    1.0
+                };
                 Pass::Forearm(0)
             }
             Pass::Forearm(iteration) => {
+                let (fourth, prior) = if self.slipped() {
+                    (self.slip, SLIP)
+                } else {
+                    (self.play, PLAY)
+                };
                 let step = self
-                    .gauss_newton(self.forearm, self.play, &PLAY)
+                    .gauss_newton(self.forearm, fourth, &prior)
                     .map_err(EstimateError::ForearmFit)?;
                 (self.forearm, self.uncertainty.0) = (step.circle, step.uncertainty);
+                if self.slipped() {
+                    self.slip = step.fourth;
+                }
                 if iteration + 1 < ITERATIONS {
                     Pass::Forearm(iteration + 1)
                 } else {
@@ -817,11 +973,24 @@ impl Refinement {
             Pass::UpperArm(iteration) => {
                 // The fixed shoulder's fit as this pass met it.
                 self.fixed_fit = (self.sums.rms(), self.sums.bias.worst());
+                // A slip's slide trades off against the shoulder's place
+                // over the short arc after it: where the posture is known,
+                // it holds the shoulder.
+                let (fourth, prior) = if self.slipped() {
+                    let posture = self.trunk_gate.map(|_| self.posture());
+                    (self.slip, Prior { posture, ..SLIP })
+                } else {
+                    (self.play, PLAY)
+                };
                 let step = self
-                    .gauss_newton(self.upper_arm, self.play, &PLAY)
+                    .gauss_newton(self.upper_arm, fourth, &prior)
                     .map_err(EstimateError::UpperArmFit)?;
                 (self.upper_arm, self.uncertainty.1) = (step.circle, step.uncertainty);
-                self.play = step.fourth;
+                if self.slipped() {
+                    self.slip = step.fourth;
+                } else {
+                    self.play = step.fourth;
+                }
                 if iteration + 1 < ITERATIONS {
                     Pass::UpperArm(iteration + 1)
                 } else {
@@ -833,8 +1002,7 @@ impl Refinement {
                         Pass::Rhythm(0)
                     } else if let (Some(gate), true) = (
                         self.trunk_gate,
-                        self.posture_side != 0.0
-                            && self.largest_step.1 <= MAX_TRUNK_STEP * MAX_TRUNK_STEP,
+                        self.posture_side != 0.0 && self.jumps.largest <= JUMP * JUMP,
                     ) {
                         if self.fixed_fit.0 > gate.residual || self.fixed_fit.1 > gate.bias {
                             // A fixed shoulder does not explain the path:
@@ -916,11 +1084,6 @@ impl Refinement {
                     .circle;
                 self.moments = CircleMoments::new();
                 self.forearm_evidence = (self.phase_arc(&self.forearm), self.sums.rms());
-                self.posture_side = match self.sums.first {
-                    Some(grasp) if self.forearm.centre.x < grasp.x => -1.0,
-                    Some(_) => 1.0,
-                    None => 0.0,
-                };
                 self.forearm_bias = self.sums.bias.worst();
                 // count ≥ 1: the pass had at least MIN_PHASE_SAMPLES samples
                 // and an all-outlier phase leaves the mean at 0.
@@ -1000,6 +1163,15 @@ impl Refinement {
         if self.compliance != 0.0 {
             pose = grasp_point(pose, self.compliance, force);
         }
+        // After a slip, the grasp of the arm before it.
+        if self.slip != 0.0 {
+            let along = self.slip_along(index, pose);
+            pose = Pose::new(
+                pose.x + self.slip * along.x,
+                pose.z + self.slip * along.z,
+                pose.psi,
+            );
+        }
         let share = match self.pass {
             Pass::UpperArmMoments
             | Pass::UpperArm(_)
@@ -1022,7 +1194,14 @@ impl Refinement {
         prior: &Prior,
     ) -> Result<Step, CircleFitError> {
         let step = self.sums.step(&circle, fourth, prior)?;
-        self.scale = (SCALE_MULTIPLE * self.sums.weighted_rms()).max(MIN_SCALE);
+        // After a slip the samples beyond it are off the circle by the
+        // slide until it is measured: weighted down by a scale of the
+        // residuals, they would hold its measurement back.
+        self.scale = if self.slipped() {
+            f64::INFINITY
+        } else {
+            (SCALE_MULTIPLE * self.sums.weighted_rms()).max(MIN_SCALE)
+        };
         Ok(step)
     }
 
@@ -1041,13 +1220,17 @@ impl Refinement {
         let disagreement = libm::fabs(self.forearm.radius - self.forearm_kasa.radius).max(
             libm::fabs(self.upper_arm.radius - self.upper_arm_kasa.radius),
         );
+        // The arm the robot holds at the end: after a slip, the forearm
+        // longer by the slide and the arm moved by it along x (the
+        // shared truth's slip: the arm whose resting grasp is S's origin).
+        let moved = |point: Point| Point::new(point.x + self.slip * self.posture_side, point.z);
         ArmEstimate {
             upper_arm_length: self.rest.radius,
-            forearm_length: self.forearm.radius,
-            elbow: self.forearm.centre,
-            shoulder: self.rest.centre,
+            forearm_length: self.forearm.radius + self.slip,
+            elbow: moved(self.forearm.centre),
+            shoulder: moved(self.rest.centre),
             path_upper_arm_length: self.upper_arm.radius,
-            path_shoulder: self.upper_arm.centre,
+            path_shoulder: moved(self.upper_arm.centre),
             grasp_pitch_offset: self.pitch_offset,
             method: Method::Online,
             evidence: FitEvidence {
@@ -1071,6 +1254,7 @@ impl Refinement {
                 play: Some(self.play),
                 compliance: Some(self.compliance),
                 trunk_compliance: Some(self.trunk),
+                grasp_slip: Some(self.slip),
                 plane_tilt: Some(libm::atan(self.tilt_slope)),
                 resolution: {
                     let step = self.reader.resolution();
@@ -1115,20 +1299,23 @@ impl Refinement {
         }
     }
 
-    /// Tracks the largest step of the grasp point between the samples the
-    /// lift's passes read in turn, squared (no square root per sample: the
-    /// firmware's slices; a non-finite step counts as infinite).
-    fn track_step(&mut self, point: Point) {
-        if let Some(last) = self.largest_step.0 {
-            let (dx, dz) = (point.x - last.x, point.z - last.z);
-            let step = dx * dx + dz * dz;
-            self.largest_step.1 = if step.is_nan() {
-                f64::INFINITY
-            } else {
-                self.largest_step.1.max(step)
-            };
+    /// Whether the lift jumped (a grasp slip), judged against the
+    /// sensor's resolution as the reader has met it.
+    fn slipped(&self) -> bool {
+        let step = self.reader.resolution();
+        self.jumps.slipped(step.x.max(step.z))
+    }
+
+    /// The derivative of the grasp point read at `path[index]` (measured
+    /// at `pose`) by the slip's slide: d − side x̂ from the jump on, d the
+    /// unit vector from the grasp to the elbow (cos(psi − δ), −sin(psi − δ)),
+    /// x̂ S's x axis; zero before the jump or without one.
+    fn slip_along(&self, index: usize, pose: Pose) -> Point {
+        if !self.slipped() || index < self.jumps.at() {
+            return STILL;
         }
-        self.largest_step.0 = Some(point);
+        let angle = pose.psi - self.pitch_offset;
+        Point::new(libm::cos(angle) - self.posture_side, -libm::sin(angle))
     }
 
     /// `elbow` read less a yielding trunk's displacement under the robot's
