@@ -67,8 +67,8 @@
 //!    table, the shoulder at the resting elbow's height and l1 from it
 //!    along x), no rhythm prior is given, the fixed shoulder's last fit
 //!    leaves an RMS residual or a residual bias beyond the validator's
-//!    limits, and no grasp point of the lift stepped more than
-//!    [`JUMP`] from the one before (a slip), instead
+//!    limits, and no lasting step of the lift's grasp point exceeded
+//!    [`JUMP`] (a slip's jump, above), instead
 //!    [`ITERATIONS`] Gauss-Newton passes fit a **yielding trunk**
 //!    (REQ-EST-012): the shoulder at the robot's force f_ext sits at
 //!    S + c f_ext, the elbow points (psi as measured) read as E − c f_ext
