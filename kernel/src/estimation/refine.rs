@@ -841,7 +841,9 @@ impl Refinement {
                 Pass::UpperArmMoments => {
                     self.jumps.track(index, pose.point());
                     let elbow = self.elbow(pose, share).0;
-                    if self.elbow_lift.is_none()
+                    // Only a trunk's fit reads it.
+                    if self.trunk_gate.is_some()
+                        && self.elbow_lift.is_none()
                         && elbow.distance(self.forearm.centre) > self.end_tolerance
                     {
                         self.elbow_lift = Some(index);
@@ -1302,8 +1304,12 @@ impl Refinement {
     /// Whether the lift jumped (a grasp slip), judged against the
     /// sensor's resolution as the reader has met it.
     fn slipped(&self) -> bool {
-        let step = self.reader.resolution();
-        self.jumps.slipped(step.x.max(step.z))
+        // Asked per sample: the reader's resolution only when a jump was
+        // seen at all.
+        self.jumps.jumps == 1 && {
+            let step = self.reader.resolution();
+            self.jumps.slipped(step.x.max(step.z))
+        }
     }
 
     /// The derivative of the grasp point read at `path[index]` (measured
