@@ -140,7 +140,12 @@ impl ImpedanceLaw {
     /// an axis is not finite. Judged term by term so that no NaN is ever
     /// made (∞ − ∞): a sum of finite terms may still overflow to ±∞, which
     /// [`Self::limit`] refuses in turn.
-    fn wrench_about(&self, pose: Pose, velocity: PoseRate, set_point: &SetPoint) -> Option<Wrench> {
+    pub(crate) fn wrench_about(
+        &self,
+        pose: Pose,
+        velocity: PoseRate,
+        set_point: &SetPoint,
+    ) -> Option<Wrench> {
         let x = [pose.x, pose.z, pose.psi];
         let v = [velocity.x, velocity.z, velocity.psi];
         let xd = [set_point.pose.x, set_point.pose.z, set_point.pose.psi];
@@ -344,7 +349,7 @@ mod tests {
 
 /// Proofs of REQ-CMD-001 and REQ-CMD-002.
 #[cfg(any(test, kani))]
-mod verification {
+pub(crate) mod verification {
     use super::*;
     use crate::config::KernelConfig;
     #[cfg(not(kani))]
@@ -493,6 +498,152 @@ mod verification {
         }
     }
 
+    /// Whether every input of the law is finite.
+    fn inputs_finite(pose: Pose, velocity: PoseRate, set_point: &SetPoint) -> bool {
+        pose.is_finite()
+            && velocity.is_finite()
+            && set_point.pose.is_finite()
+            && set_point.velocity.is_finite()
+            && set_point.acceleration.is_finite()
+    }
+
+    /// REQ-CMD-001, the contract of [`ImpedanceLaw::wrench_about`]: no
+    /// wrench (`None`) when an input is not finite (`inputs_finite`
+    /// false), and never a NaN component. Asserted of the real law by
+    /// [`verify_req_cmd_001_law_is_finite_only_on_finite_inputs`] and
+    /// assumed by [`stub::wrench_about`], which the whole-kernel harnesses
+    /// put in the law's place: one function, so the stub can assume no
+    /// more than the proof shows.
+    pub(crate) fn law_contract(
+        inputs_finite: bool,
+        wrench: Option<Wrench>,
+    ) -> Result<(), &'static str> {
+        match wrench {
+            Some(_) if !inputs_finite => Err("a non-finite input made a wrench"),
+            Some(w) if w.fx.is_nan() || w.fz.is_nan() || w.ty.is_nan() => Err("the law made a NaN"),
+            _ => Ok(()),
+        }
+    }
+
+    /// REQ-CMD-001, the contract of [`ImpedanceLaw::limit`] on `wrench`
+    /// with the flags `before`, giving `limited` and the flags `after`:
+    /// flags are only ever added (the speed's left alone); the limited
+    /// wrench is finite, each force component within the force limit and
+    /// the torque within the torque limit; a non-finite wrench is flagged
+    /// and replaced by zero; a finite one keeps its non-finite flag, its
+    /// force unless the force flag is set, and its torque unless the
+    /// torque flag is; a force or torque within its limit is kept and
+    /// not flagged. Asserted of the real limit by
+    /// [`verify_req_cmd_001_wrench_limit_is_saturated_and_flagged`] (any
+    /// wrench, any flags before) and assumed by [`stub::limit`].
+    pub(crate) fn limit_contract(
+        law: &ImpedanceLaw,
+        wrench: Wrench,
+        before: Saturation,
+        limited: Wrench,
+        after: Saturation,
+    ) -> Result<(), &'static str> {
+        let ensure = |ok: bool, failure| if ok { Ok(()) } else { Err(failure) };
+        ensure(
+            after.speed == before.speed
+                && (after.force || !before.force)
+                && (after.torque || !before.torque)
+                && (after.non_finite || !before.non_finite),
+            "the limit cleared a flag or set the speed's",
+        )?;
+        ensure(limited.is_finite(), "the limited wrench is not finite")?;
+        let force = law.max_force * (1.0 + ROUNDING);
+        ensure(
+            libm::fabs(limited.fx) <= force && libm::fabs(limited.fz) <= force,
+            "a force component beyond the force limit",
+        )?;
+        ensure(
+            libm::fabs(limited.ty) <= law.max_torque,
+            "torque beyond the limit",
+        )?;
+        if !wrench.is_finite() {
+            return ensure(
+                after.non_finite && limited == Wrench::ZERO,
+                "a non-finite wrench not flagged and replaced by zero",
+            );
+        }
+        ensure(
+            after.non_finite == before.non_finite,
+            "a finite wrench changed the non-finite flag",
+        )?;
+        ensure(
+            after.force || (limited.fx == wrench.fx && limited.fz == wrench.fz),
+            "the force changed without the force flag",
+        )?;
+        ensure(
+            after.torque || limited.ty == wrench.ty,
+            "the torque changed without the torque flag",
+        )?;
+        // Within the limits nothing acts (the force's magnitude is at
+        // most |fx| + |fz|, whatever `hypot` rounds to).
+        let force_within = libm::fabs(wrench.fx) + libm::fabs(wrench.fz) <= law.max_force;
+        ensure(
+            !force_within
+                || (limited.fx == wrench.fx
+                    && limited.fz == wrench.fz
+                    && after.force == before.force),
+            "a force within the limit was changed or flagged",
+        )?;
+        ensure(
+            libm::fabs(wrench.ty) > law.max_torque
+                || (limited.ty == wrench.ty && after.torque == before.torque),
+            "a torque within the limit was changed or flagged",
+        )
+    }
+
+    /// Kani stubs of the law, each any value its proved contract allows.
+    #[cfg(kani)]
+    pub(crate) mod stub {
+        use super::*;
+
+        /// Stub of [`ImpedanceLaw::limit`] by [`limit_contract`]: any
+        /// wrench within the limits that the contract allows (the scaling
+        /// of a symbolic force by limit / magnitude, a product the solver
+        /// must bound, is the limit's own harness's).
+        pub(crate) fn limit(
+            law: &ImpedanceLaw,
+            wrench: Wrench,
+            saturation: &mut Saturation,
+        ) -> Wrench {
+            let before = *saturation;
+            let after = Saturation {
+                force: kani::any(),
+                torque: kani::any(),
+                speed: before.speed,
+                non_finite: kani::any(),
+            };
+            let limited = kani::any::<Wrench>();
+            kani::assume(limit_contract(law, wrench, before, limited, after).is_ok());
+            *saturation = after;
+            limited
+        }
+
+        /// Stub of [`ImpedanceLaw::wrench_about`] by [`law_contract`]: any
+        /// wrench or none (an overflowing term) for finite inputs, none
+        /// otherwise. The law's three products per axis on symbolic poses
+        /// are what a whole-kernel step's solver spent its time on; the
+        /// law alone is decided in seconds.
+        pub(crate) fn wrench_about(
+            _law: &ImpedanceLaw,
+            pose: Pose,
+            velocity: PoseRate,
+            set_point: &SetPoint,
+        ) -> Option<Wrench> {
+            let wrench = if kani::any() {
+                Some(kani::any::<Wrench>())
+            } else {
+                None
+            };
+            kani::assume(law_contract(inputs_finite(pose, velocity, set_point), wrench).is_ok());
+            wrench
+        }
+    }
+
     /// The law of the default configuration.
     fn default_law() -> ImpedanceLaw {
         let config = KernelConfig::default();
@@ -522,6 +673,17 @@ mod verification {
                 ..Saturation::default()
             },
         };
+        // The flags an earlier step of the command set (the speed's), or
+        // none: the stub by the contract takes any.
+        let before = Saturation {
+            force: kani::any(),
+            torque: kani::any(),
+            speed: kani::any(),
+            non_finite: kani::any(),
+        };
+        let mut after = before;
+        let limited = law.limit(wrench, &mut after);
+        assert_eq!(limit_contract(&law, wrench, before, limited, after), Ok(()));
         let mut saturation = Saturation::default();
         let limited = law.limit(wrench, &mut saturation);
         let out = ImpedanceOutput {
@@ -551,21 +713,8 @@ mod verification {
         let set_point = kani::any::<SetPoint>();
         let (pose, velocity) = (kani::any::<Pose>(), kani::any::<PoseRate>());
         let wrench = law.wrench_about(pose, velocity, &set_point);
-        let finite = pose.is_finite()
-            && velocity.is_finite()
-            && set_point.pose.is_finite()
-            && set_point.velocity.is_finite()
-            && set_point.acceleration.is_finite();
-        assert!(
-            finite || wrench.is_none(),
-            "a non-finite input made a wrench"
-        );
-        if let Some(w) = wrench {
-            assert!(
-                !(w.fx.is_nan() || w.fz.is_nan() || w.ty.is_nan()),
-                "the law made a NaN"
-            );
-        }
+        let finite = inputs_finite(pose, velocity, &set_point);
+        assert_eq!(law_contract(finite, wrench), Ok(()));
         kani::cover!(wrench.is_some(), "law: a wrench");
         kani::cover!(finite && wrench.is_none(), "law: a term overflowed");
         kani::cover!(!finite, "law: a non-finite input");

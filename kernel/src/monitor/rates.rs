@@ -88,37 +88,45 @@ impl<const N: usize> RateWindow<N> {
         )
     }
 
-    /// Velocity and force rate between the oldest and newest frame; zero
-    /// until the frames span the whole window (the first `window` seconds
-    /// after a start or reset, when a rate over a shorter span would be
-    /// mostly noise: 0.5 N of force noise over 1 ms reads as 700 N/s).
-    ///
-    /// Differences that overflow (frames near `f64::MAX` apart, which no
-    /// sensor gives) read as infinitely fast, so that the monitors stop;
-    /// no NaN is made (∞ / ∞).
+    /// Velocity and force rate between the oldest and newest frame
+    /// ([`rates_between`]); zero until the frames span the whole window
+    /// (the first `window` seconds after a start or reset, when a rate
+    /// over a shorter span would be mostly noise: 0.5 N of force noise
+    /// over 1 ms reads as 700 N/s).
     pub fn rates(&self) -> Rates {
         match (self.frames.front(), self.frames.back()) {
-            (Some(old), Some(new)) if new.time - old.time >= self.window => {
-                let dt = new.time - old.time;
-                let moved = [
-                    new.pose.x - old.pose.x,
-                    new.pose.z - old.pose.z,
-                    new.pose.psi - old.pose.psi,
-                    libm::hypot(new.wrench.fx - old.wrench.fx, new.wrench.fz - old.wrench.fz),
-                ];
-                if !(dt.is_finite() && moved.iter().all(|d| d.is_finite())) {
-                    return Rates {
-                        velocity: PoseRate::new(f64::INFINITY, f64::INFINITY, f64::INFINITY),
-                        force_rate: f64::INFINITY,
-                    };
-                }
-                Rates {
-                    velocity: PoseRate::new(moved[0] / dt, moved[1] / dt, moved[2] / dt),
-                    force_rate: moved[3] / dt,
-                }
-            }
+            (Some(old), Some(new)) => rates_between(old, new, self.window),
             _ => Rates::default(),
         }
+    }
+}
+
+/// Velocity and force rate from frame `old` to frame `new`; zero unless
+/// they are at least `window` [s] apart. Differences that overflow
+/// (frames near `f64::MAX` apart, which no sensor gives) read as
+/// infinitely fast, so that the monitors stop; no NaN is made (∞ / ∞).
+pub(crate) fn rates_between(old: &PathSample, new: &PathSample, window: f64) -> Rates {
+    let dt = new.time - old.time;
+    // A NaN span (a NaN time) spans nothing either.
+    let spans = dt >= window;
+    if !spans {
+        return Rates::default();
+    }
+    let moved = [
+        new.pose.x - old.pose.x,
+        new.pose.z - old.pose.z,
+        new.pose.psi - old.pose.psi,
+        libm::hypot(new.wrench.fx - old.wrench.fx, new.wrench.fz - old.wrench.fz),
+    ];
+    if !(dt.is_finite() && moved.iter().all(|d| d.is_finite())) {
+        return Rates {
+            velocity: PoseRate::new(f64::INFINITY, f64::INFINITY, f64::INFINITY),
+            force_rate: f64::INFINITY,
+        };
+    }
+    Rates {
+        velocity: PoseRate::new(moved[0] / dt, moved[1] / dt, moved[2] / dt),
+        force_rate: moved[3] / dt,
     }
 }
 
@@ -175,7 +183,7 @@ mod tests {
 
 /// Proof of the rate window behind REQ-MON-002 and REQ-MON-003.
 #[cfg(any(test, kani))]
-mod verification {
+pub(crate) mod verification {
     use super::*;
     use crate::config::SafetyLimits;
     #[cfg(not(kani))]
@@ -215,7 +223,16 @@ mod verification {
     /// the window, and never NaN (an overflowing difference reads as
     /// infinitely fast).
     pub(super) fn check_rates<const N: usize>(window: &RateWindow<N>) -> Result<(), &'static str> {
-        let rates = window.rates();
+        rates_contract(window.spans(), &window.rates())
+    }
+
+    /// REQ-MON-002, the contract of [`rates_between`] and so of
+    /// [`RateWindow::rates`]: zero unless the window `spans`, never NaN.
+    /// Asserted of the real rates by
+    /// [`verify_req_mon_002_rates_are_zero_until_the_window_spans`] (via
+    /// [`check_rates`]) and assumed by [`stub::rates_between`], which the
+    /// whole-kernel harnesses put in their place.
+    pub(crate) fn rates_contract(spans: bool, rates: &Rates) -> Result<(), &'static str> {
         let values = [
             rates.velocity.x,
             rates.velocity.z,
@@ -225,10 +242,29 @@ mod verification {
         if values.iter().any(|v| v.is_nan()) {
             return Err("a rate is NaN");
         }
-        if !window.spans() && rates != Rates::default() {
+        if !spans && *rates != Rates::default() {
             return Err("a rate over less than the window");
         }
         Ok(())
+    }
+
+    /// Kani stubs of the window, each any value its proved contract
+    /// allows.
+    #[cfg(kani)]
+    pub(crate) mod stub {
+        use super::*;
+
+        /// Stub of [`rates_between`] by [`rates_contract`]: any rates,
+        /// none NaN, zero unless the frames are a window apart (the
+        /// divisions of symbolic differences are the rates' own harness's).
+        pub(crate) fn rates_between(old: &PathSample, new: &PathSample, window: f64) -> Rates {
+            let rates = Rates {
+                velocity: kani::any(),
+                force_rate: kani::any(),
+            };
+            kani::assume(rates_contract(new.time - old.time >= window, &rates).is_ok());
+            rates
+        }
     }
 
     /// A frame at `time` [s] with any pose and wrench under the
