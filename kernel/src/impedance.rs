@@ -592,9 +592,8 @@ pub(crate) mod verification {
 
         /// Stub of [`ImpedanceLaw::wrench_about`] by [`law_contract`]: any
         /// wrench or none (an overflowing term) for finite inputs, none
-        /// otherwise. The law's three products per axis on symbolic poses
-        /// are what a whole-kernel step's solver spent its time on; the
-        /// law alone is decided in seconds.
+        /// otherwise: the law's three products per axis on symbolic poses
+        /// stay in its own harness, decided in seconds.
         pub(crate) fn wrench_about(
             _law: &ImpedanceLaw,
             pose: Pose,

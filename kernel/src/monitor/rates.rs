@@ -256,7 +256,9 @@ pub(crate) mod verification {
 
         /// Stub of [`rates_between`] by [`rates_contract`]: any rates,
         /// none NaN, zero unless the frames are a window apart (the
-        /// divisions of symbolic differences are the rates' own harness's).
+        /// divisions of symbolic differences are the rates' own harness's,
+        /// proved there for finite frames in time order: the only frames
+        /// the kernel pushes into its window).
         pub(crate) fn rates_between(old: &PathSample, new: &PathSample, window: f64) -> Rates {
             let rates = Rates {
                 velocity: kani::any(),
