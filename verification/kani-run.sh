@@ -16,7 +16,9 @@
 # Env: KANI_TIMEOUT (default 600s), KANI_LOG_DIR (default
 #      $CARGO_TARGET_DIR/kani-logs), KANI_RESULTS (a file the per-harness
 #      lines are appended to), KANI_TOML (a file each harness's
-#      `[[kani.run]]` record for spec/requirements.toml is appended to).
+#      `[[kani.run]]` record for spec/requirements.toml is appended to),
+#      KANI_ARGS (more `cargo kani` options, e.g. --solver minisat, for
+#      experiments; a recorded run uses none).
 # Prints one line per harness: name, result, wall seconds, peak RSS [MiB].
 # Exits 0 and says SKIPPED when `cargo kani` is not installed.
 set -uo pipefail
@@ -45,7 +47,7 @@ for h in "${sel[@]}"; do
   t0=$(date +%s)
   /usr/bin/time -f '%M' -o "$logs/$h.rss" \
     cargo kani -p limb-kernel -Z stubbing -Z unstable-options \
-      --harness-timeout "$timeout" --harness "$h" >"$log" 2>&1
+      --harness-timeout "$timeout" --harness "$h" ${KANI_ARGS:-} >"$log" 2>&1
   rc=$?
   secs=$(( $(date +%s) - t0 ))
   rss_mib=$(( $(tail -n1 "$logs/$h.rss" 2>/dev/null | tr -dc 0-9 || echo 0) / 1024 ))
