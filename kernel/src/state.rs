@@ -336,7 +336,7 @@ impl Grasp {
     }
 
     /// Stops (holding the Grasp hold when nothing was commanded yet).
-    pub fn stop(self, reason: StopReason, start: StopStart) -> SafeStop {
+    pub fn stop(&self, reason: StopReason, start: StopStart) -> SafeStop {
         SafeStop::latch(reason, start.or_holding(self.hold))
     }
 }
@@ -473,7 +473,7 @@ impl Estimate {
     }
 
     /// Stops.
-    pub fn stop(self, reason: StopReason, start: StopStart) -> SafeStop {
+    pub fn stop(&self, reason: StopReason, start: StopStart) -> SafeStop {
         SafeStop::latch(reason, start)
     }
 }
@@ -564,7 +564,7 @@ impl Validated {
     }
 
     /// Stops.
-    pub fn stop(self, reason: StopReason, start: StopStart) -> SafeStop {
+    pub fn stop(&self, reason: StopReason, start: StopStart) -> SafeStop {
         SafeStop::latch(reason, start.or_holding(Some(self.hold)))
     }
 }
@@ -589,7 +589,7 @@ impl Manipulate {
     }
 
     /// Stops.
-    pub fn stop(self, reason: StopReason, start: StopStart) -> SafeStop {
+    pub fn stop(&self, reason: StopReason, start: StopStart) -> SafeStop {
         SafeStop::latch(reason, start)
     }
 }
