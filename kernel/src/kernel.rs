@@ -1208,8 +1208,9 @@ mod verification {
     /// same validated model (Manipulate only from Validated by an approved
     /// target), and a refusal names the request and the state and changes
     /// nothing. One harness per kind (all five in one, at any clock, did
-    /// not finish in 10 min, nor did Validated's alone with a non-finite
-    /// clock: its symbolic execution never ended). The clock is one sane
+    /// not finish in 10 min, nor did Validated's alone at any clock: its
+    /// symbolic execution never ended; both measured while the answer
+    /// still moved the state, not retried since). The clock is one sane
     /// value: which requests an insane clock lets through (a stop, a
     /// stop's reset: neither reaches Validated or Manipulate) is REQ-SM-004's
     /// proofs'. Returns the state's kind after the request and the answer.
