@@ -841,26 +841,6 @@ mod verification {
     /// Where the arm rests at the start of a session (frame S origin).
     const REST: Pose = Pose::new(0.0, 0.0, 0.0);
 
-    /// Whether a step with `frame` at `now` has a fault visible without a
-    /// model (a bad clock or frame, a stale or future frame, a force
-    /// component, the torque or the grasp point beyond its limit in
-    /// `limits`): the faults [`check_step`] wants a stop for.
-    fn faulty(frame: &PathSample, now: f64, limits: &SafetyLimits) -> bool {
-        let (p, w) = (frame.pose, frame.wrench);
-        // The age only of finite times (∞ − ∞ is NaN: real Kani's check).
-        !(now.is_finite()
-            && frame.time.is_finite()
-            && p.is_finite()
-            && w.is_finite()
-            && (0.0..=limits.max_sensor_age).contains(&(now - frame.time))
-            && libm::fabs(w.fx) <= limits.max_force
-            && libm::fabs(w.fz) <= limits.max_force
-            && libm::fabs(w.ty) <= limits.max_torque
-            && p.z >= -limits.table_tolerance
-            && limits.workspace_x.contains(p.x)
-            && limits.workspace_z.contains(p.z))
-    }
-
     /// REQ-MON-006, REQ-MON-007, REQ-MON-012, REQ-CMD-001: what one step
     /// must give for `frame` at `now` from a state of kind `before`, decided
     /// without a square root: the command's invariants
@@ -877,10 +857,21 @@ mod verification {
         limits: &SafetyLimits,
     ) -> Result<(), &'static str> {
         command.check_components(limits)?;
+        let (p, w) = (frame.pose, frame.wrench);
         let floor = -limits.table_tolerance;
-        if (faulty(frame, now, limits) || before == StateKind::SafeStop)
-            && command.state != StateKind::SafeStop
-        {
+        // The age only of finite times (∞ − ∞ is NaN: real Kani's check).
+        let fault = !(now.is_finite()
+            && frame.time.is_finite()
+            && p.is_finite()
+            && w.is_finite()
+            && (0.0..=limits.max_sensor_age).contains(&(now - frame.time))
+            && libm::fabs(w.fx) <= limits.max_force
+            && libm::fabs(w.fz) <= limits.max_force
+            && libm::fabs(w.ty) <= limits.max_torque
+            && p.z >= floor
+            && limits.workspace_x.contains(p.x)
+            && limits.workspace_z.contains(p.z));
+        if (fault || before == StateKind::SafeStop) && command.state != StateKind::SafeStop {
             return Err("a fault or SafeStop did not give the stop command");
         }
         let moving = matches!(command.state, StateKind::Estimate | StateKind::Manipulate);

@@ -13,7 +13,10 @@
 //!
 //! # Theory of operation
 //! Each state is a struct holding exactly what it needs; each transition is
-//! a method that consumes the state it leaves. [`Validated`] and
+//! a method that consumes the state it leaves, except the stop, which
+//! every state answers from a borrow (`stop(&self)`: the runtime wrapper
+//! keeps its state until the stop replaces it, and copying the 2 kB state
+//! into the call cost real Kani dearly). [`Validated`] and
 //! [`Manipulate`] hold a [`ValidatedArm`], which only
 //! [`crate::validate::validate`] constructs, and the only way to build a
 //! `Validated` is the conclusion of [`Estimate::advance`], which calls the
