@@ -92,6 +92,19 @@ pub(crate) fn any_request() -> Request {
     }
 }
 
+/// A manipulation target beyond the default joint limits (the elbow
+/// flexed 3.5 rad) [rad].
+const TARGET_BEYOND_THE_LIMITS: JointAngles = JointAngles {
+    shoulder_elevation: 1.0,
+    elbow_flexion: 3.5,
+};
+
+/// A manipulation target that is not finite [rad].
+const TARGET_NOT_FINITE: JointAngles = JointAngles {
+    shoulder_elevation: f64::NAN,
+    elbow_flexion: 0.6,
+};
+
 /// Any request, its target one of three that reach each outcome of the
 /// target checks: accepted ([`MANIPULATION_TARGET`]), beyond the joint
 /// limits, not finite. For the proofs about gating, where what any target
@@ -100,16 +113,25 @@ pub(crate) fn any_request_of_known_targets() -> Request {
     match kani::any::<u8>() % 7 {
         0 => Request::StartEstimation,
         1 => Request::ApproveManipulation(MANIPULATION_TARGET),
-        2 => Request::ApproveManipulation(JointAngles {
-            shoulder_elevation: 1.0,
-            elbow_flexion: 3.5,
-        }),
-        3 => Request::ApproveManipulation(JointAngles {
-            shoulder_elevation: f64::NAN,
-            elbow_flexion: 0.6,
-        }),
+        2 => Request::ApproveManipulation(TARGET_BEYOND_THE_LIMITS),
+        3 => Request::ApproveManipulation(TARGET_NOT_FINITE),
         4 => Request::FinishManipulation,
         5 => Request::Stop,
+        _ => Request::Reset,
+    }
+}
+
+/// [`any_request_of_known_targets`] but a stop, for a proof that takes
+/// the stop apart: its symbolic execution explores every arm of the
+/// choice, so an assumption that the request is not a stop would not
+/// spare it the stop's path (a stop replaces the state).
+pub(crate) fn any_request_of_known_targets_but_a_stop() -> Request {
+    match kani::any::<u8>() % 6 {
+        0 => Request::StartEstimation,
+        1 => Request::ApproveManipulation(MANIPULATION_TARGET),
+        2 => Request::ApproveManipulation(TARGET_BEYOND_THE_LIMITS),
+        3 => Request::ApproveManipulation(TARGET_NOT_FINITE),
+        4 => Request::FinishManipulation,
         _ => Request::Reset,
     }
 }
