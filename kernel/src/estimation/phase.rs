@@ -75,6 +75,50 @@ pub fn detect_phases(path: &[PathSample], grasp: &PointModel) -> Result<Phases, 
     detect_phases_from(path, grasp, lift)
 }
 
+/// Where the path departs from phase 1's circle: the scan of
+/// [`detect_phases_from`] over a path of `len` samples from index `lift`,
+/// given each sample's `residual` from the circle [m] (any number; NaN
+/// counts as neither departed nor settled). A sample departs when its
+/// residual exceeds `departure_tolerance` and at least
+/// [`DEPARTURE_PERCENT`] % of a look-ahead window of up to
+/// [`DEPARTURE_WINDOW`] samples (and at least [`MIN_PHASE_SAMPLES`]) do
+/// too; the result is then the end of the samples settled on the circle
+/// (residual ≤ `settled_tolerance`) before it, in `lift..=len`. `None`:
+/// no departure.
+pub(crate) fn departure_from(
+    len: usize,
+    lift: usize,
+    residual: impl Fn(usize) -> f64,
+    departure_tolerance: f64,
+    settled_tolerance: f64,
+) -> Option<usize> {
+    let departed = |index: usize| residual(index) > departure_tolerance;
+    // Samples beyond tolerance in the look-ahead window [index, index + W).
+    let mut ahead = (lift..len.min(lift + DEPARTURE_WINDOW))
+        .filter(|&i| departed(i))
+        .count();
+    let mut settled = lift;
+    for index in lift..len {
+        let width = DEPARTURE_WINDOW.min(len - index);
+        let value = residual(index);
+        if value > departure_tolerance
+            && width >= MIN_PHASE_SAMPLES
+            && ahead * 100 >= width * DEPARTURE_PERCENT
+        {
+            return Some(settled);
+        }
+        if value <= settled_tolerance {
+            settled = index + 1;
+        }
+        // `ahead` counts `index` when it departed, so this never goes
+        // below 0; saturating, the scan is total without that invariant
+        // (which a proof over any residuals would have to count out).
+        ahead = ahead.saturating_sub(usize::from(departed(index)));
+        ahead += usize::from(index + DEPARTURE_WINDOW < len && departed(index + DEPARTURE_WINDOW));
+    }
+    None
+}
+
 /// [`detect_phases`] with phase 1 starting at path index `lift`; the first
 /// guess of phase 1 ends where psi has grown by [`INITIAL_PSI`] − [`LIFT_PSI`].
 ///
@@ -109,31 +153,13 @@ pub fn detect_phases_from(
                 libm::fabs(point.distance(fit.circle.centre) - fit.circle.radius)
             })
         };
-        let departed = |index: usize| residual(index) > departure_tolerance;
-        // Samples beyond tolerance in the look-ahead window [index, index + W).
-        let mut ahead = (lift..path.len().min(lift + DEPARTURE_WINDOW))
-            .filter(|&i| departed(i))
-            .count();
-        let mut settled = lift;
-        let mut departure = None;
-        for index in lift..path.len() {
-            let width = DEPARTURE_WINDOW.min(path.len() - index);
-            let value = residual(index);
-            if value > departure_tolerance
-                && width >= MIN_PHASE_SAMPLES
-                && ahead * 100 >= width * DEPARTURE_PERCENT
-            {
-                departure = Some(settled);
-                break;
-            }
-            if value <= settled_tolerance {
-                settled = index + 1;
-            }
-            ahead -= usize::from(departed(index));
-            ahead += usize::from(
-                index + DEPARTURE_WINDOW < path.len() && departed(index + DEPARTURE_WINDOW),
-            );
-        }
+        let departure = departure_from(
+            path.len(),
+            lift,
+            residual,
+            departure_tolerance,
+            settled_tolerance,
+        );
         end = departure.ok_or(EstimateError::UpperArmPhaseTooShort)?;
     }
     if end.saturating_sub(lift) < MIN_PHASE_SAMPLES {
