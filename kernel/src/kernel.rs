@@ -1273,7 +1273,7 @@ mod verification {
 
     libm_stubbed! { [hypot, sqrt, atan2, sin, cos]
         /// REQ-SM-005, REQ-SM-002 in Estimate (see [`gating_from`]) for a
-        /// stop: taken, to SafeStop.
+        /// stop; its cover shows the stop taken, to SafeStop.
         #[cfg_attr(kani, kani::proof)]
         #[cfg_attr(kani, kani::unwind(24))]
         pub(super) fn verify_req_sm_005_gating_in_estimate_a_stop() {

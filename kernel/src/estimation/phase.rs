@@ -85,7 +85,7 @@ pub fn detect_phases(path: &[PathSample], grasp: &PointModel) -> Result<Phases, 
 /// too; the result is then the end of the samples settled on the circle
 /// (residual ≤ `settled_tolerance`) before it, in `lift..=len`. `None`:
 /// no departure.
-pub(crate) fn departure_from(
+pub(super) fn departure_from(
     len: usize,
     lift: usize,
     residual: impl Fn(usize) -> f64,

@@ -83,7 +83,7 @@ pub(super) fn robust_fit_contract(
 /// What the phase scan ([`phase::departure_from`]) must give on a path of
 /// `len` samples from `lift`: no departure, or an end of phase 1 in
 /// `lift..=len` (the ranges `detect_phases_from` cuts rely on it).
-pub(super) fn departure_contract(len: usize, lift: usize, departure: Option<usize>) -> bool {
+fn departure_contract(len: usize, lift: usize, departure: Option<usize>) -> bool {
     departure.is_none_or(|end| lift <= end && end <= len)
 }
 
