@@ -395,6 +395,7 @@ impl LiftEnd {
             LiftEnd::ArcReached => "arc_reached",
             LiftEnd::JointMargin(_) => "joint_margin",
             LiftEnd::MotionComplete => "motion_complete",
+            LiftEnd::ForceMargin(_) => "force_margin",
         }
     }
 }
@@ -403,6 +404,7 @@ impl Display for LiftEnd {
     fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
         match self {
             LiftEnd::JointMargin(limit) => write!(f, "{}: {limit}", self.name()),
+            LiftEnd::ForceMargin(force) => write!(f, "{}: {force}", self.name()),
             _ => f.write_str(self.name()),
         }
     }
@@ -650,6 +652,11 @@ mod tests {
             (LiftEnd::ArcReached, 1, "arc_reached"),
             (LiftEnd::JointMargin(Limit::ElbowFlexion), 2, "joint_margin"),
             (LiftEnd::MotionComplete, 3, "motion_complete"),
+            (
+                LiftEnd::ForceMargin(Violation::new(Limit::ForceMagnitude, 42.5, 42.0)),
+                4,
+                "force_margin",
+            ),
         ];
         for (end, code, name) in ends {
             assert_eq!((end.code(), end.name()), (code, name));
@@ -730,6 +737,10 @@ mod tests {
         assert_eq!(
             LiftEnd::JointMargin(Limit::ShoulderElevation).to_string(),
             "joint_margin: shoulder_elevation"
+        );
+        assert_eq!(
+            LiftEnd::ForceMargin(Violation::new(Limit::ForceMagnitude, 42.5, 42.0)).to_string(),
+            "force_margin: force_magnitude 42.5000 N beyond 42.0000 N"
         );
         assert_eq!(
             Rejection::ForearmArcTooShort(0.4).to_string(),

@@ -71,6 +71,10 @@ fn fault_codes_are_stable() {
         (LiftEnd::ArcReached.code(), 1),
         (LiftEnd::JointMargin(Limit::ElbowFlexion).code(), 2),
         (LiftEnd::MotionComplete.code(), 3),
+        (
+            LiftEnd::ForceMargin(Violation::new(Limit::ForceMagnitude, 42.5, 42.0)).code(),
+            4,
+        ),
         (ConfigProblem::NonFinite.code(), 1),
         (ConfigProblem::NotPositive.code(), 2),
         (ConfigProblem::Negative.code(), 3),
@@ -119,6 +123,7 @@ fn config_field_codes_are_stable() {
         (F::HoldRate, 507, "lift_shaping.hold_rate"),
         (F::HoldMoveTime, 508, "lift_shaping.hold_move_time"),
         (F::Extension, 509, "lift_shaping.extension"),
+        (F::ForceMargin, 510, "lift_shaping.force_margin"),
         (F::MinUpperArmLength, 601, "validation.min_upper_arm_length"),
         (F::MaxUpperArmLength, 602, "validation.max_upper_arm_length"),
         (F::MinForearmLength, 603, "validation.min_forearm_length"),

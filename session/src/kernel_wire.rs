@@ -347,6 +347,14 @@ pub enum LiftEndReport {
     },
     /// The planned lift and its extension were complete.
     MotionComplete,
+    /// The filtered interaction force reached the force limit less the
+    /// lift's force margin: the arm resists the lift.
+    ForceMargin {
+        /// The filtered force magnitude [N].
+        force_n: f64,
+        /// The force limit less the margin [N].
+        bound_n: f64,
+    },
 }
 
 impl From<LiftEnd> for LiftEndReport {
@@ -358,6 +366,10 @@ impl From<LiftEnd> for LiftEndReport {
                 limit_name: limit.name().to_owned(),
             },
             LiftEnd::MotionComplete => LiftEndReport::MotionComplete,
+            LiftEnd::ForceMargin(force) => LiftEndReport::ForceMargin {
+                force_n: force.value,
+                bound_n: force.bound,
+            },
         }
     }
 }

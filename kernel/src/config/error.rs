@@ -68,6 +68,8 @@ pub enum ConfigField {
     HoldMoveTime = 508,
     /// `lift_shaping.extension`.
     Extension = 509,
+    /// `lift_shaping.force_margin`.
+    ForceMargin = 510,
     /// `validation.min_upper_arm_length`.
     MinUpperArmLength = 601,
     /// `validation.max_upper_arm_length`.
@@ -133,6 +135,7 @@ impl ConfigField {
             F::HoldRate => "lift_shaping.hold_rate",
             F::HoldMoveTime => "lift_shaping.hold_move_time",
             F::Extension => "lift_shaping.extension",
+            F::ForceMargin => "lift_shaping.force_margin",
             F::MinUpperArmLength => "validation.min_upper_arm_length",
             F::MaxUpperArmLength => "validation.max_upper_arm_length",
             F::MinForearmLength => "validation.min_forearm_length",
