@@ -43,9 +43,10 @@ pub struct LiftShaping {
     /// the force limit `limits.max_force` [N]: the lift ends, the arm held
     /// where it is, once the filtered force magnitude
     /// ([`crate::lift::FORCE_FILTER_TIME`]) reaches the limit less this
-    /// margin (REQ-MON-014). 3 N: 42 N under the default 45 N; the
-    /// heaviest MyoArm subject that follows the lift (m95) peaks at
-    /// 40.5 N, the filter's noise is ≈ 0.04 N.
+    /// margin (REQ-MON-014). 3 N: the lift ends at 42 N under the default
+    /// 45 N limit; the heaviest MyoArm subject that follows the lift (m95)
+    /// peaks at 40.0 N filtered (41.4 N raw); the filter's noise is
+    /// ≈ 0.04 N.
     pub force_margin: f64,
 }
 
