@@ -20,7 +20,8 @@
 //! a person's arm's own effects: passive stiffness and spasticity add
 //! joint torques, shoulder rhythm moves the shoulder with the elevation,
 //! cuff offset moves the grasp off the forearm's line and lengthens its
-//! rod;
+//! rod, shoulder height starts the arm in a rest posture the table's
+//! coordinates count from;
 //! compliance, tilt, latency, backlash and quantization change what
 //! [`Plant::measure`] returns, in that order, noise being added before the
 //! quantization. Without effects no extra arithmetic is done, so the nominal
@@ -28,6 +29,7 @@
 
 use crate::contact::{self, ActiveSet, CANDIDATES};
 use crate::dynamics::{apply, apply_transpose, arm_terms, arm_terms_with_rod, Vec2};
+use crate::effects::shoulder_height::Rest;
 use crate::effects::{Effects, Spasticity};
 use crate::noise::Gaussian;
 use crate::params::PlantParameters;
@@ -36,6 +38,7 @@ use crate::sensing::{
     TORQUE_NOISE,
 };
 use alloc::collections::VecDeque;
+use alloc::format;
 use alloc::string::String;
 use limb_kernel::geometry::{Point, Pose, Wrench};
 use limb_kernel::motion::SetPoint;
@@ -79,6 +82,7 @@ pub struct Plant {
     params: PlantParameters,
     /// The robot's damping D (of `params.robot`, which never changes).
     damping: [f64; 3],
+    /// Joint angles in the table's coordinates (see [`Plant::joint_angles`]).
     q: Vec2,
     qd: Vec2,
     steps: u64,
@@ -98,6 +102,9 @@ pub struct Plant {
     /// Elbow speeds q̇2 of the last steps, newest last (spasticity only:
     /// the reflex sees the one its delay ago).
     elbow_speeds: VecDeque<f64>,
+    /// The rest posture the table's coordinates count from (shoulder
+    /// height only; see [`Plant::joint_angles`]).
+    rest: Option<Rest>,
     /// This instant's [`Plant::resolve`], once computed: a
     /// [`Plant::measure`] and the [`Plant::step`] after it share it (the
     /// state, set-point and time are the same), so an instant's dynamics
@@ -106,7 +113,8 @@ pub struct Plant {
 }
 
 impl Plant {
-    /// The plant at rest at q = (0, 0), t = 0, holding x_d at the grasp pose.
+    /// The plant at rest (q = (0, 0), or a raised shoulder's rest posture),
+    /// t = 0, holding x_d at the grasp pose.
     ///
     /// # Errors
     /// The first invalid parameter.
@@ -124,6 +132,15 @@ impl Plant {
             params.arm.forearm_mass *= mass.factor;
         }
         params.check()?;
+        let rest = match effects.shoulder_height {
+            Some(raised) => Some(raised.rest(params.arm.upper_arm_length).ok_or_else(|| {
+                format!(
+                    "shoulder_height {} m is not below the upper arm's length {} m",
+                    raised.height, params.arm.upper_arm_length
+                )
+            })?),
+            None => None,
+        };
         Ok(Self {
             params,
             damping: params.robot.damping(),
@@ -139,6 +156,7 @@ impl Plant {
             shoulder_velocity: [0.0, 0.0],
             slipped: false,
             elbow_speeds: VecDeque::new(),
+            rest,
             resolved: None,
         })
     }
@@ -160,7 +178,7 @@ impl Plant {
 
     /// Joint angles and velocities (q, q̇) [rad, rad/s].
     pub fn state(&self) -> (Vec2, Vec2) {
-        (self.q, self.qd)
+        (self.joint_angles(self.q), self.qd)
     }
 
     /// The set-point the robot follows until the next [`Plant::set`].
@@ -174,10 +192,22 @@ impl Plant {
         self.set_point
     }
 
-    fn dynamics(&self, q: Vec2, qd: Vec2, set: ActiveSet) -> Option<Instant> {
+    /// The joint angles of the table's coordinates `q` (the plant's state:
+    /// (0, 0) at rest, the table's bounds at 0): the same but under a
+    /// raised shoulder, whose rest posture they count from (see
+    /// `effects::shoulder_height`).
+    fn joint_angles(&self, q: Vec2) -> Vec2 {
+        match self.rest {
+            Some(rest) => [q[0] + rest.q[0], q[1] + rest.q[1]],
+            None => q,
+        }
+    }
+
+    fn dynamics(&self, table: Vec2, qd: Vec2, set: ActiveSet) -> Option<Instant> {
         let a = &self.params.arm;
         let r = &self.params.robot;
         let d = self.damping;
+        let q = self.joint_angles(table);
         let mut t = match self.effects.cuff_offset {
             Some(cuff) => arm_terms_with_rod(a, q, qd, a.forearm_length + cuff.along),
             None => arm_terms(a, q, qd),
@@ -198,11 +228,16 @@ impl Plant {
             t.jacobian_rate[0] -= cuff.across * s * psid * psid;
             t.jacobian_rate[1] -= cuff.across * c * psid * psid;
         }
+        if let Some(rest) = self.rest {
+            // The shoulder stands where the rest posture puts it.
+            t.pose[0] += rest.shift[0];
+            t.pose[1] += rest.shift[1];
+        }
         if let Some(rhythm) = self.effects.shoulder_rhythm {
             // The shoulder translates with the elevation q1, the arm on
             // it; its weight acts through the rise (see
             // `effects::shoulder_rhythm`).
-            let shift = rhythm.displacement(q[0]);
+            let shift = rhythm.displacement(table[0]);
             t.pose[0] += shift[0];
             t.pose[1] += shift[1];
             t.jacobian[0][0] += rhythm.x;
@@ -443,6 +478,10 @@ impl Plant {
         let a = &self.params.arm;
         let (l1, l2) = (a.upper_arm_length, a.forearm_length);
         let mut shoulder = [l1 + l2 + self.shoulder_offset[0], self.shoulder_offset[1]];
+        if let Some(rest) = self.rest {
+            shoulder[0] += rest.shift[0];
+            shoulder[1] += rest.shift[1];
+        }
         if let Some(rhythm) = self.effects.shoulder_rhythm {
             let shift = rhythm.displacement(self.q[0]);
             shoulder[0] += shift[0];
@@ -455,11 +494,12 @@ impl Plant {
         }
         let shoulder = Point::new(shoulder[0], shoulder[1]);
         let round = |v: f64| libm::round(v / POTENTIOMETER_RESOLUTION) * POTENTIOMETER_RESOLUTION;
+        let q = self.joint_angles(self.q);
         Truth {
-            q: [round(self.q[0]), round(self.q[1])],
+            q: [round(q[0]), round(q[1])],
             elbow: Point::new(
-                shoulder.x - l1 * libm::cos(self.q[0]),
-                shoulder.z + l1 * libm::sin(self.q[0]),
+                shoulder.x - l1 * libm::cos(q[0]),
+                shoulder.z + l1 * libm::sin(q[0]),
             ),
             shoulder,
         }

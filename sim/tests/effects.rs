@@ -128,6 +128,7 @@ fn no_effect_or_a_neutral_one_is_byte_identical_to_nominal() {
         ("spasticity", vec![("gain", 0.0), ("threshold", 0.1)]),
         ("shoulder_rhythm", vec![("x", 0.0), ("z", 0.0)]),
         ("cuff_offset", vec![("across", 0.0), ("along", 0.0)]),
+        ("shoulder_height", vec![("height", 0.0)]),
     ];
     for (name, params) in neutral {
         let effect = Effect::new(name, &params).unwrap();
@@ -197,7 +198,9 @@ fn simulation_of_each_shared_log_matches_it() {
 /// geometry puts it (`spec/human-arm.md`): with `shoulder_rhythm` the
 /// shoulder sits at (L + x q1, z q1) and the grasp l2 from the elbow
 /// along the forearm; with `cuff_offset` the grasp is `across` off the
-/// forearm's line, frame S's origin the grasp at t = 0 (noise off).
+/// forearm's line; with `shoulder_height` the shoulder stands `height`
+/// above the elbow resting on the table, the upper arm sloping down to
+/// it; frame S's origin the grasp at t = 0 (noise off).
 #[test]
 fn a_person_s_arm_s_geometry_is_the_logged_grasp() {
     let (l1, l2) = (0.30, 0.20);
@@ -209,7 +212,10 @@ fn a_person_s_arm_s_geometry_is_the_logged_grasp() {
     };
     let rhythm = Effect::new("shoulder_rhythm", &[("x", -0.02), ("z", 0.03)]).unwrap();
     let cuff = Effect::new("cuff_offset", &[("across", 0.025), ("along", 0.04)]).unwrap();
-    for (effect, across) in [(rhythm, 0.0), (cuff, 0.025)] {
+    let raised = Effect::new("shoulder_height", &[("height", 0.05)]).unwrap();
+    // The upper arm's elevation at rest under the raised shoulder.
+    let rest = -(0.05_f64 / l1).asin();
+    for (effect, across) in [(rhythm, 0.0), (cuff, 0.025), (raised, 0.0)] {
         let rows = simulate(l1, l2, false, &[effect]);
         let mut largest_q1: f64 = 0.0;
         for row in &rows {
@@ -227,6 +233,11 @@ fn a_person_s_arm_s_geometry_is_the_logged_grasp() {
             largest_q1 = largest_q1.max(q1);
             let expected = match effect.name() {
                 "shoulder_rhythm" => [l1 + l2 - 0.02 * q1, 0.03 * q1],
+                "shoulder_height" => {
+                    // The table holds the elbow at its rest height.
+                    assert!(q1 >= rest - 0.005, "q1 {q1} below the rest {rest}");
+                    [l2 + l1 * rest.cos(), 0.05]
+                }
                 _ => [l1 + l2, -across],
             };
             // q1 is the potentiometer's (0.0047 rad steps).
@@ -240,4 +251,24 @@ fn a_person_s_arm_s_geometry_is_the_logged_grasp() {
         }
         assert!(largest_q1 > 0.5, "the lift elevates the upper arm");
     }
+}
+
+/// A shoulder the upper arm cannot reach down from is refused with its
+/// reason, not clamped: `height` at or above l1 has no rest posture.
+#[test]
+fn a_shoulder_above_the_upper_arm_s_reach_is_refused() {
+    let raise = |height: f64| {
+        let effect = Effect::new("shoulder_height", &[("height", height)]).unwrap();
+        Plant::with_effects(
+            PlantParameters::new(0.2, 0.2),
+            Effects::new(&[effect]).unwrap(),
+        )
+    };
+    let refused = raise(0.2).err().unwrap_or_default();
+    assert!(
+        refused.contains("shoulder_height") && refused.contains("upper arm"),
+        "{refused}"
+    );
+    assert!(raise(0.21).is_err());
+    assert!(raise(0.19).is_ok());
 }

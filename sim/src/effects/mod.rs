@@ -18,7 +18,7 @@
 //! * dynamics side (change the plant): `joint_friction`, `mass_mismatch`,
 //!   `shoulder_drift`, `active_torque`, `grasp_slip`, and a person's arm's
 //!   own: `passive_stiffness`, `spasticity`, `shoulder_rhythm`,
-//!   `cuff_offset`.
+//!   `cuff_offset`, `shoulder_height`.
 //!
 //! [`measurement`] applies the measurement side to a noise-free record
 //! without the plant, as a diagnosis predicts it.
@@ -42,6 +42,7 @@ pub mod passive_stiffness;
 pub mod plane_tilt;
 pub mod quantization;
 pub mod shoulder_drift;
+pub mod shoulder_height;
 pub mod shoulder_rhythm;
 pub mod spasticity;
 
@@ -57,6 +58,7 @@ pub use passive_stiffness::PassiveStiffness;
 pub use plane_tilt::PlaneTilt;
 pub use quantization::Quantization;
 pub use shoulder_drift::ShoulderDrift;
+pub use shoulder_height::ShoulderHeight;
 pub use shoulder_rhythm::ShoulderRhythm;
 pub use spasticity::Spasticity;
 
@@ -183,7 +185,7 @@ pub struct Descriptor {
 
 /// Every effect of `plant.md` (except `none`, the absence of effects): the
 /// ten of a robot's gap, then the four of a person's arm (`spec/human-arm.md`).
-pub const CATALOGUE: [Descriptor; 14] = [
+pub const CATALOGUE: [Descriptor; 15] = [
     Descriptor {
         name: "joint_friction",
         parameters: &joint_friction::PARAMETERS,
@@ -239,6 +241,10 @@ pub const CATALOGUE: [Descriptor; 14] = [
     Descriptor {
         name: "cuff_offset",
         parameters: &cuff_offset::PARAMETERS,
+    },
+    Descriptor {
+        name: "shoulder_height",
+        parameters: &shoulder_height::PARAMETERS,
     },
 ];
 
@@ -338,6 +344,8 @@ pub enum Effect {
     ShoulderRhythm(ShoulderRhythm),
     /// See [`cuff_offset`].
     CuffOffset(CuffOffset),
+    /// See [`shoulder_height`].
+    ShoulderHeight(ShoulderHeight),
 }
 
 impl Effect {
@@ -415,10 +423,11 @@ impl Effect {
                 threshold: b,
             }),
             "shoulder_rhythm" => Self::ShoulderRhythm(ShoulderRhythm { x: a, z: b }),
-            _ => Self::CuffOffset(CuffOffset {
+            "cuff_offset" => Self::CuffOffset(CuffOffset {
                 across: a,
                 along: b,
             }),
+            _ => Self::ShoulderHeight(ShoulderHeight { height: a }),
         })
     }
 
@@ -462,6 +471,7 @@ impl Effect {
             Self::Spasticity(_) => 11,
             Self::ShoulderRhythm(_) => 12,
             Self::CuffOffset(_) => 13,
+            Self::ShoulderHeight(_) => 14,
         };
         &CATALOGUE[index]
     }
@@ -483,6 +493,7 @@ impl Effect {
             Self::Spasticity(e) => vec![e.gain, e.threshold],
             Self::ShoulderRhythm(e) => vec![e.x, e.z],
             Self::CuffOffset(e) => vec![e.across, e.along],
+            Self::ShoulderHeight(e) => vec![e.height],
         }
     }
 }
@@ -518,6 +529,8 @@ pub struct Effects {
     pub shoulder_rhythm: Option<ShoulderRhythm>,
     /// Grasp off the forearm's line.
     pub cuff_offset: Option<CuffOffset>,
+    /// Shoulder above the elbow at rest.
+    pub shoulder_height: Option<ShoulderHeight>,
 }
 
 impl Effects {
@@ -550,6 +563,7 @@ impl Effects {
                 Effect::Spasticity(e) => put(&mut set.spasticity, e, name)?,
                 Effect::ShoulderRhythm(e) => put(&mut set.shoulder_rhythm, e, name)?,
                 Effect::CuffOffset(e) => put(&mut set.cuff_offset, e, name)?,
+                Effect::ShoulderHeight(e) => put(&mut set.shoulder_height, e, name)?,
             }
         }
         Ok(set)

@@ -101,10 +101,13 @@ pub const RANGES: [&[Range]; 14] = [
     ],
 ];
 
-/// The classes: the fourteen effects, then `none`.
+/// The classes: the fourteen effects the self-check draws (those with a
+/// [`RANGES`] entry: the catalogue's `shoulder_height` is the plant's
+/// only, not yet a diagnosis candidate), then `none`.
 pub fn classes() -> Vec<&'static str> {
     CATALOGUE
         .iter()
+        .take(RANGES.len())
         .map(|d| d.name)
         .chain(std::iter::once("none"))
         .collect()
