@@ -44,6 +44,26 @@ fn a_persons_log_read_on_a_persons_build_is_clean() {
     assert!(arm_error(&d) < 0.001, "arm {:?}", d.arm);
 }
 
+/// A person's arm that rests bent (the shoulder 5 cm above the elbow on
+/// the table, `shoulder_height`) is a person's arm, not an effect: on a
+/// person's build the arm's fit holds the shoulder's height with the
+/// lengths (started at the kernel's estimate of the shoulder and the
+/// elbow), so the log reads clean with the arm and the height right.
+/// Without the height in the fit, the bent rest reads as
+/// `shoulder_rhythm` and `cuff_offset` (`diagnosis/README.md`).
+#[test]
+fn a_raised_shoulder_is_part_of_a_persons_arm() {
+    let raised = Effect::new("shoulder_height", &[("height", 0.05)]).unwrap();
+    let d = read_on(ArmBuild::Person, &[raised]);
+    assert!(d.effects.is_empty(), "{:?}", d.effects);
+    assert!(arm_error(&d) < 0.001, "arm {:?}", d.arm);
+    assert!(
+        (d.arm.shoulder[1] - 0.05).abs() < 0.001,
+        "shoulder {:?}",
+        d.arm.shoulder
+    );
+}
+
 /// The forearm's gravity moment the effects found, over the build's:
 /// `mass_mismatch`'s factor times `cuff_offset`'s (l2 + along) / l2.
 fn forearm_moment_factor(d: &Diagnosis) -> f64 {

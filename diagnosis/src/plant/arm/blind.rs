@@ -102,8 +102,9 @@ pub const RANGES: [&[Range]; 14] = [
 ];
 
 /// The classes: the fourteen effects the self-check draws (those with a
-/// [`RANGES`] entry: the catalogue's `shoulder_height` is the plant's
-/// only, not yet a diagnosis candidate), then `none`.
+/// [`RANGES`] entry: the catalogue's `shoulder_height` is no effect the
+/// diagnosis names but part of a person's arm, fitted with the lengths),
+/// then `none`.
 pub fn classes() -> Vec<&'static str> {
     CATALOGUE
         .iter()
@@ -369,14 +370,14 @@ fn identifiable_size(
         ) else {
             return f64::NAN;
         };
-        let mut solve = LengthSolve::default();
+        let mut solve = LengthSolve::new(2);
         for (i, row) in minus(&with, &at).iter().enumerate() {
             for (s, value) in row.iter().enumerate() {
                 let j = [
                     (a.row(i)[s] - b.row(i)[s]) / (2.0 * h),
                     (c.row(i)[s] - d.row(i)[s]) / (2.0 * h),
                 ];
-                solve.add(j, *value, scales[s]);
+                solve.add(&j, *value, scales[s]);
             }
         }
         let Some(delta) = solve.solve() else {

@@ -10,7 +10,10 @@
 //! the same log ([`kernel_estimate`]: `Method::Auto`, what `limb
 //! estimate` reports); the lengths range over [`LENGTH_RANGES`], widened
 //! to [`LENGTH_REACH`] around the estimate where that reaches beyond.
-//! Lengths that are given are held fixed.
+//! On a person's build the arm has a third parameter, the shoulder's
+//! height above the elbow at rest (`shoulder_height`: a person's arm
+//! rests bent), started at the kernel's estimate of the shoulder and the
+//! elbow. Lengths that are given are held fixed (and the arm flat).
 
 use crate::model::{Candidate, Parameter, Scale};
 use limb_kernel::estimation::{estimate_arm, Method};
@@ -123,10 +126,29 @@ const SHORTEST: f64 = 0.05;
 /// Name of the base candidate: the arm's own lengths.
 pub const ARM: &str = "arm";
 
-/// The arm lengths' candidate (the engine's base): l1 and l2 over
+/// Range of a person's shoulder height above the elbow at rest [m] (the
+/// arm's third parameter on a person's build; `shoulder_height`'s allowed
+/// range, less its top).
+pub const HEIGHT_RANGE: [f64; 2] = [0.0, 0.2];
+
+/// Where the arm's fit starts: the kernel's estimate of the lengths and,
+/// on a person's build, of the shoulder's height above the elbow.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Start {
+    /// l1, l2 [m].
+    pub lengths: (f64, f64),
+    /// The estimated shoulder centre's height above the elbow's at the
+    /// start of the motion [m] (frame S's z), inside [`HEIGHT_RANGE`].
+    pub height: f64,
+}
+
+/// The arm's candidate (the engine's base): l1 and l2 over
 /// [`LENGTH_RANGES`], each widened to reach [`LENGTH_REACH`] around
-/// `start` (the kernel's estimate), never below [`SHORTEST`].
-pub fn arm_candidate(start: Option<(f64, f64)>) -> Candidate {
+/// `start` (the kernel's estimate), never below [`SHORTEST`]; on a
+/// person's build (`raised`) also the shoulder's height above the elbow
+/// at rest over [`HEIGHT_RANGE`] (`shoulder_height`): a person's arm
+/// rests bent, and that is the arm's geometry, as its lengths are.
+pub fn arm_candidate(start: Option<(f64, f64)>, raised: bool) -> Candidate {
     let range = |i: usize, centre: Option<f64>| {
         let [low, high] = LENGTH_RANGES[i];
         match centre {
@@ -139,19 +161,29 @@ pub fn arm_candidate(start: Option<(f64, f64)>) -> Candidate {
     };
     let [a, b] = range(0, start.map(|s| s.0));
     let [c, d] = range(1, start.map(|s| s.1));
+    let mut parameters = vec![
+        Parameter::new("l1", "m", a, b, "upper-arm length"),
+        Parameter::new("l2", "m", c, d, "forearm length"),
+    ];
+    if raised {
+        parameters.extend([Parameter::new(
+            "height",
+            "m",
+            HEIGHT_RANGE[0],
+            HEIGHT_RANGE[1],
+            "shoulder centre's height above the elbow's at rest",
+        )]);
+    }
     Candidate {
         name: ARM,
-        parameters: vec![
-            Parameter::new("l1", "m", a, b, "upper-arm length"),
-            Parameter::new("l2", "m", c, d, "forearm length"),
-        ],
+        parameters,
     }
 }
 
 /// The kernel's own estimate of the arm from the log's measured path
 /// (what `limb estimate` reports with `auto`), when it has one: the
 /// samples the kernel would record, at most its path capacity.
-pub fn kernel_estimate(records: &[Record]) -> Option<(f64, f64)> {
+pub fn kernel_estimate(records: &[Record]) -> Option<Start> {
     let mut path: Vec<PathSample> = Vec::new();
     for sample in records.iter().map(Record::path_sample) {
         if path.len() < PATH_CAPACITY && is_due(path.last(), sample.time) {
@@ -160,7 +192,16 @@ pub fn kernel_estimate(records: &[Record]) -> Option<(f64, f64)> {
     }
     let estimate = estimate_arm(&path, Method::Auto).ok()?;
     let (l1, l2) = (estimate.upper_arm_length, estimate.forearm_length);
-    (l1.is_finite() && l2.is_finite() && l1 > 0.0 && l2 > 0.0).then_some((l1, l2))
+    let height = estimate.shoulder.z - estimate.elbow.z;
+    let height = if height.is_finite() {
+        height.clamp(HEIGHT_RANGE[0], HEIGHT_RANGE[1])
+    } else {
+        0.0
+    };
+    (l1.is_finite() && l2.is_finite() && l1 > 0.0 && l2 > 0.0).then_some(Start {
+        lengths: (l1, l2),
+        height,
+    })
 }
 
 /// The spacing of the lattice `values` sit on: the median gap between
@@ -212,8 +253,11 @@ mod tests {
             assert_eq!(candidates_match_catalogue(&candidates(duration)), Ok(()));
         }
         for start in [None, Some((0.3, 0.2)), Some((0.06, 0.05))] {
-            let arm = arm_candidate(start);
-            assert!(arm.parameters.iter().all(|p| p.is_valid()), "{arm:?}");
+            for raised in [false, true] {
+                let arm = arm_candidate(start, raised);
+                assert!(arm.parameters.iter().all(|p| p.is_valid()), "{arm:?}");
+                assert_eq!(arm.parameters.len(), 2 + usize::from(raised));
+            }
         }
     }
 }

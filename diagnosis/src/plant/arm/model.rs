@@ -23,12 +23,14 @@
 //! *expected* rounded reading E[round((v + n) / step) · step] over the
 //! measurement noise n, since the real sensor rounds its noisy reading.
 
-use super::effects::{arm_candidate, candidates, kernel_estimate, resolution, ARM};
+use super::effects::{
+    arm_candidate, candidates, kernel_estimate, resolution, Start, ARM, HEIGHT_RANGE,
+};
 use super::replay::Replay;
 use crate::model::{grid, Applied, Data, Hints, Model, ModelError, Series, Signal};
 use limb_kernel::motion::SetPoint;
 use limb_sim::effects::measurement::{self, reading, Reading, MEASUREMENT_SIDE};
-use limb_sim::effects::{Effect, Effects};
+use limb_sim::effects::{Effect, Effects, ShoulderHeight};
 use limb_sim::log::Record;
 use limb_sim::{
     ArmBuild, ArmParameters, Plant, PlantParameters, ANGLE_NOISE, FORCE_NOISE, POSITION_NOISE,
@@ -128,20 +130,30 @@ pub enum Lengths {
     Fitted,
 }
 
+/// An arm the sim is built with: l1, l2 and the shoulder's height above
+/// the elbow at rest [m] (0 on plant.md's dummy, and wherever the height
+/// is not fitted).
+type Arm = [f64; ARM_PARAMETERS];
+/// Parameters of an [`Arm`]: the most a person's build fits.
+const ARM_PARAMETERS: usize = 3;
+/// Half the step of each arm parameter's finite difference [m].
+const ARM_DIFFERENCES: Arm = [2e-4; ARM_PARAMETERS];
+
 /// Nominal records of the arms asked for most recently, newest last.
-type NominalCache = Mutex<Vec<((u64, u64), Arc<Vec<Reading>>)>>;
+type NominalCache = Mutex<Vec<(Arm, Arc<Vec<Reading>>)>>;
 /// Exact predictions at the linearisation's reference arm of the effect
 /// sets asked for most recently (the polish and the cost of one point
 /// predict the same set), newest last.
 type PredictionCache = Mutex<Vec<(Vec<Applied>, Arc<Series>)>>;
 /// Exact predictions kept.
 const CACHED_PREDICTIONS: usize = 8;
-/// Half the step of the finite differences of the length Jacobian [m].
-const LENGTH_DIFFERENCE: f64 = 2e-4;
+/// Index of the shoulder's height in an [`Arm`].
+const HEIGHT: usize = 2;
 
-/// The prediction linearised in the arm lengths around a reference arm:
-/// P(effects, l) ≈ P(effects, l₀) + J (l − l₀), J the derivative by l1
-/// and l2 at l₀ (central differences) of the prediction with the effects
+/// The prediction linearised in the arm around a reference arm:
+/// P(effects, l) ≈ P(effects, l₀) + J (l − l₀), J the derivative by l1,
+/// l2 (and the shoulder's height, when fitted) at l₀ (central
+/// differences; forward at the height's lower bound) of the prediction with the effects
 /// the reference was solved with (none for the first reference). With
 /// the nominal sim's derivative instead, the lengths' Gauss–Newton
 /// settles only linearly under an effect that changes how the readings
@@ -151,47 +163,105 @@ const LENGTH_DIFFERENCE: f64 = 2e-4;
 /// (blind seed 161803, log 5).
 #[derive(Debug)]
 struct Linearisation {
-    reference: (f64, f64),
+    reference: Arm,
     /// The effects (no base) `jacobian` is the derivative of.
     effects: Vec<Applied>,
     /// The reference was solved with a grasp slip among the effects: it is
     /// the arm before the slip.
     before_slip: bool,
-    jacobian: [Series; 2],
+    /// ∂P/∂l1, ∂P/∂l2 (and ∂P/∂height when the height is fitted).
+    jacobian: Vec<Series>,
 }
 
-/// The normal equations of a weighted least-squares change of the two
-/// arm lengths (l1, l2): terms added one residual at a time, then solved.
-#[derive(Debug, Default)]
+/// The normal equations of a weighted least-squares change of the arm's
+/// parameters (l1, l2, and the shoulder's height when it is fitted):
+/// terms added one residual at a time, then solved.
+#[derive(Debug)]
 pub(super) struct LengthSolve {
-    normal: [[f64; 2]; 2],
-    right: [f64; 2],
+    dims: usize,
+    normal: [[f64; ARM_PARAMETERS]; ARM_PARAMETERS],
+    right: Arm,
 }
 
 impl LengthSolve {
-    /// Adds residual `r` with derivative `j` by (l1, l2), weight 1/`sigma`².
-    pub(super) fn add(&mut self, j: [f64; 2], r: f64, sigma: f64) {
+    /// The equations of `dims` parameters (2 or [`ARM_PARAMETERS`], 3).
+    pub(super) fn new(dims: usize) -> Self {
+        Self {
+            dims: dims.clamp(2, ARM_PARAMETERS),
+            normal: [[0.0; ARM_PARAMETERS]; ARM_PARAMETERS],
+            right: [0.0; ARM_PARAMETERS],
+        }
+    }
+
+    /// Adds residual `r` with derivative `j` by the parameters, weight
+    /// 1/`sigma`².
+    pub(super) fn add(&mut self, j: &[f64], r: f64, sigma: f64) {
         let w = 1.0 / (sigma * sigma);
-        for x in 0..2 {
+        let n = self.dims.min(j.len());
+        for x in 0..n {
             self.right[x] += w * j[x] * r;
-            for y in 0..2 {
+            for y in 0..n {
                 self.normal[x][y] += w * j[x] * j[y];
             }
         }
     }
 
-    /// The change of (l1, l2) [m] that fits the residuals best; `None`
-    /// when the equations are singular or not finite.
-    pub(super) fn solve(&self) -> Option<[f64; 2]> {
+    /// The change of the parameters that fits the residuals best (the
+    /// unused ones 0); `None` when the equations are singular or not
+    /// finite.
+    pub(super) fn solve(&self) -> Option<Arm> {
         let (a, b) = (&self.normal, &self.right);
-        let det = a[0][0] * a[1][1] - a[0][1] * a[1][0];
-        if !(det.is_finite() && det.abs() > 0.0) {
+        let mut x = [0.0; ARM_PARAMETERS];
+        if self.dims == 2 {
+            let det = a[0][0] * a[1][1] - a[0][1] * a[1][0];
+            if !(det.is_finite() && det.abs() > 0.0) {
+                return None;
+            }
+            x[0] = (a[1][1] * b[0] - a[0][1] * b[1]) / det;
+            x[1] = (a[0][0] * b[1] - a[1][0] * b[0]) / det;
+            return Some(x);
+        }
+        // Gaussian elimination with partial pivoting, each row scaled by
+        // its diagonal first (the parameters' units differ).
+        let n = self.dims;
+        let mut m = *a;
+        let mut rhs = *b;
+        let scale: Vec<f64> = (0..n).map(|i| m[i][i].abs().sqrt()).collect();
+        if scale.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
             return None;
         }
-        Some([
-            (a[1][1] * b[0] - a[0][1] * b[1]) / det,
-            (a[0][0] * b[1] - a[1][0] * b[0]) / det,
-        ])
+        for i in 0..n {
+            rhs[i] /= scale[i];
+            for k in 0..n {
+                m[i][k] /= scale[i] * scale[k];
+            }
+        }
+        for column in 0..n {
+            let pivot =
+                (column..n).max_by(|p, q| m[*p][column].abs().total_cmp(&m[*q][column].abs()))?;
+            m.swap(column, pivot);
+            rhs.swap(column, pivot);
+            let diagonal = m[column][column];
+            if !(diagonal.is_finite() && diagonal.abs() > 1e-12) {
+                return None;
+            }
+            let pivot_row = m[column];
+            for row in column + 1..n {
+                let factor = m[row][column] / diagonal;
+                for (target, p) in m[row].iter_mut().zip(&pivot_row).take(n).skip(column) {
+                    *target -= factor * p;
+                }
+                rhs[row] -= factor * rhs[column];
+            }
+        }
+        for row in (0..n).rev() {
+            let known: f64 = (row + 1..n).map(|k| m[row][k] * x[k]).sum();
+            x[row] = (rhs[row] - known) / m[row][row];
+        }
+        for (value, s) in x.iter_mut().zip(&scale) {
+            *value /= s;
+        }
+        x.iter().all(|v| v.is_finite()).then_some(x)
     }
 }
 
@@ -199,13 +269,18 @@ impl LengthSolve {
 /// [`ArmModel::anchor`]).
 const GRASP_SLIP: &str = "grasp_slip";
 
+/// `value` [m] on the [`LENGTH_GRAIN`] grid.
+fn snap(value: f64) -> f64 {
+    (value / LENGTH_GRAIN).round() * LENGTH_GRAIN
+}
+
 /// The reference plant compared with one log.
 pub struct ArmModel {
     lengths: Lengths,
     /// The body the lengths are put on (plant.md's dummy or a person).
     build: ArmBuild,
-    /// Where the fit of the lengths starts (the kernel's estimate).
-    start: Option<(f64, f64)>,
+    /// Where the fit of the arm starts (the kernel's estimate).
+    start: Option<Start>,
     /// The commanded set-point at every integration step to the last
     /// sample's (replayed once; every plant run reads it).
     set_points: Vec<SetPoint>,
@@ -272,7 +347,10 @@ impl ArmModel {
         };
         let mut candidates = candidates(duration);
         if lengths == Lengths::Fitted {
-            candidates.push(arm_candidate(start));
+            candidates.push(arm_candidate(
+                start.map(|s| s.lengths),
+                build == ArmBuild::Person,
+            ));
         }
         let model = Self {
             lengths,
@@ -292,19 +370,16 @@ impl ArmModel {
             linearisation: Mutex::new(None),
             predictions: Mutex::new(Vec::new()),
         };
-        let (l1, l2) = match lengths {
-            Lengths::Given(l1, l2) => (l1, l2),
-            Lengths::Fitted => model.start.unwrap_or((0.3, 0.2)),
-        };
+        let arm = model.initial();
         let nominal = model
-            .nominal(l1, l2)
+            .nominal(arm)
             .map_err(|e| ArmError::Sim(e.to_string()))?;
         if nominal.iter().flatten().any(|v| !v.is_finite()) {
             return Err(ArmError::Sim("the nominal sim is not finite".into()));
         }
         if lengths == Lengths::Fitted {
             model
-                .linearise((l1, l2), &[])
+                .linearise(arm, &[])
                 .map_err(|e| ArmError::Sim(e.to_string()))?;
         }
         Ok(model)
@@ -312,28 +387,35 @@ impl ArmModel {
 
     /// Linearises the prediction of `effects` (no base) around arm
     /// `reference`, the arm solved with them.
-    fn linearise(&self, reference: (f64, f64), effects: &[&Applied]) -> Result<(), ModelError> {
-        let h = LENGTH_DIFFERENCE;
-        let (l1, l2) = reference;
-        let derivative = |(a, b): ((f64, f64), (f64, f64))| -> Result<Series, ModelError> {
-            let plus = self.exact(a, effects)?;
-            let minus = self.exact(b, effects)?;
+    fn linearise(&self, reference: Arm, effects: &[&Applied]) -> Result<(), ModelError> {
+        let derivative = |i: usize| -> Result<Series, ModelError> {
+            let h = ARM_DIFFERENCES[i];
+            let (mut plus, mut minus) = (reference, reference);
+            plus[i] += h;
+            // The height's lower bound is a flat arm: a forward
+            // difference there.
+            let central = i != HEIGHT || reference[i] - h >= HEIGHT_RANGE[0];
+            if central {
+                minus[i] -= h;
+            }
+            let width = if central { 2.0 * h } else { h };
+            let plus = self.exact(plus, effects)?;
+            let minus = self.exact(minus, effects)?;
             let mut out = Series::with_capacity(plus.signals(), plus.samples());
-            for i in 0..plus.samples() {
+            for k in 0..plus.samples() {
                 let row: Vec<f64> = plus
-                    .row(i)
+                    .row(k)
                     .iter()
-                    .zip(minus.row(i))
-                    .map(|(p, m)| (p - m) / (2.0 * h))
+                    .zip(minus.row(k))
+                    .map(|(p, m)| (p - m) / width)
                     .collect();
                 out.push(&row)?;
             }
             Ok(out)
         };
-        let jacobian = [
-            derivative(((l1 + h, l2), (l1 - h, l2)))?,
-            derivative(((l1, l2 + h), (l1, l2 - h)))?,
-        ];
+        let jacobian = (0..self.dims())
+            .map(derivative)
+            .collect::<Result<Vec<_>, _>>()?;
         if let Ok(mut slot) = self.linearisation.lock() {
             *slot = Some(Arc::new(Linearisation {
                 reference,
@@ -348,16 +430,42 @@ impl ArmModel {
         Ok(())
     }
 
+    /// How many of the arm's parameters are fitted: l1 and l2, and on a
+    /// person's build the shoulder's height.
+    fn dims(&self) -> usize {
+        if self.lengths == Lengths::Fitted && self.build == ArmBuild::Person {
+            ARM_PARAMETERS
+        } else {
+            2
+        }
+    }
+
+    /// The arm the fit starts at (the given one when given).
+    fn initial(&self) -> Arm {
+        let mut arm = [0.0; ARM_PARAMETERS];
+        match (self.lengths, self.start) {
+            (Lengths::Given(l1, l2), _) => (arm[0], arm[1]) = (l1, l2),
+            (Lengths::Fitted, Some(start)) => {
+                (arm[0], arm[1]) = start.lengths;
+                if self.dims() > HEIGHT {
+                    arm[HEIGHT] = start.height;
+                }
+            }
+            (Lengths::Fitted, None) => (arm[0], arm[1]) = (0.3, 0.2),
+        }
+        arm
+    }
+
     fn current_linearisation(&self) -> Option<Arc<Linearisation>> {
         self.linearisation.lock().ok().and_then(|l| l.clone())
     }
 
     /// The exact prediction of `effects` (no base) for arm `arm`.
-    fn exact(&self, arm: (f64, f64), applied: &[&Applied]) -> Result<Series, ModelError> {
+    fn exact(&self, arm: Arm, applied: &[&Applied]) -> Result<Series, ModelError> {
         let list = self.effects(applied)?;
         let effects = Effects::new(&list).map_err(|e| ModelError::Effects(e.to_string()))?;
         if list.iter().all(|e| MEASUREMENT_SIDE.contains(&e.name())) {
-            self.measured(&self.nominal(arm.0, arm.1)?, &effects)
+            self.measured(&self.nominal(arm)?, &effects)
         } else {
             self.simulated(arm, effects)
         }
@@ -373,7 +481,7 @@ impl ArmModel {
     /// put the forearm after the slip `shift` · (1 − f) too long and leave
     /// the linearisation to bridge a centimetre; anchored at l2 − shift ·
     /// f, the slip's own prediction starts from the forearm before it.
-    fn anchor(&self, lin: &Linearisation, applied: &[&Applied]) -> (f64, f64) {
+    fn anchor(&self, lin: &Linearisation, applied: &[&Applied]) -> Arm {
         let slip = applied.iter().find_map(|a| {
             let candidate = self.data.candidates.get(a.candidate)?;
             match (candidate.name, a.values.as_slice()) {
@@ -399,15 +507,13 @@ impl ArmModel {
             }
         }
         let share = if all > 0.0 { after / all } else { 0.0 };
-        (lin.reference.0, lin.reference.1 - shift * share)
+        let mut arm = lin.reference;
+        arm[1] -= shift * share;
+        arm
     }
 
     /// The exact prediction of `applied` (no base) at `anchor` (cached).
-    fn at_reference(
-        &self,
-        anchor: (f64, f64),
-        applied: &[&Applied],
-    ) -> Result<Arc<Series>, ModelError> {
+    fn at_reference(&self, anchor: Arm, applied: &[&Applied]) -> Result<Arc<Series>, ModelError> {
         let key: Vec<Applied> = applied.iter().map(|a| (*a).clone()).collect();
         if let Ok(cache) = self.predictions.lock() {
             if let Some((_, p)) = cache.iter().find(|(k, _)| *k == key) {
@@ -445,22 +551,20 @@ impl ArmModel {
     /// The kernel's estimate the fit of the lengths starts at, when the
     /// lengths are fitted and the kernel could estimate them.
     pub fn start(&self) -> Option<(f64, f64)> {
-        self.start
+        self.start.map(|s| s.lengths)
     }
 
-    /// The arm lengths in `applied` (the base's values), else the given
-    /// ones, else the start; and the effects without the base.
-    pub fn arm_of<'a>(&self, applied: &'a [Applied]) -> ((f64, f64), Vec<&'a Applied>) {
+    /// The arm in `applied` (the base's values: l1, l2 and on a person's
+    /// build the shoulder's height), else the given one, else the start;
+    /// and the effects without the base.
+    pub fn arm_of<'a>(&self, applied: &'a [Applied]) -> (Arm, Vec<&'a Applied>) {
         let base = self.base();
-        let mut arm = match self.lengths {
-            Lengths::Given(l1, l2) => (l1, l2),
-            Lengths::Fitted => self.start.unwrap_or((0.3, 0.2)),
-        };
+        let mut arm = self.initial();
         let mut effects = Vec::with_capacity(applied.len());
         for a in applied {
             if Some(a.candidate) == base {
-                if let [l1, l2] = a.values[..] {
-                    arm = (l1, l2);
+                for (slot, value) in arm.iter_mut().zip(&a.values) {
+                    *slot = *value;
                 }
             } else {
                 effects.push(a);
@@ -471,7 +575,6 @@ impl ArmModel {
 
     /// The plant's parameters for an arm `l1`, `l2` on `build` (noise off).
     fn parameters(build: ArmBuild, l1: f64, l2: f64) -> PlantParameters {
-        let snap = |l: f64| (l / LENGTH_GRAIN).round() * LENGTH_GRAIN;
         let mut params = PlantParameters::new(snap(l1), snap(l2));
         params.arm = ArmParameters::built(
             build,
@@ -492,20 +595,28 @@ impl ArmModel {
         }
     }
 
-    /// The nominal record of arm `l1`, `l2`: what the robot senses at
-    /// every step, noise off (cached).
-    fn nominal(&self, l1: f64, l2: f64) -> Result<Arc<Vec<Reading>>, ModelError> {
-        let params = Self::parameters(self.build, l1, l2);
-        let key = (
-            params.arm.upper_arm_length.to_bits(),
-            params.arm.forearm_length.to_bits(),
-        );
+    /// The plant of `arm` with `effects` (noise off): on a raised
+    /// shoulder (height above 0) with `shoulder_height` added.
+    fn plant(&self, arm: Arm, mut effects: Effects) -> Result<Plant, ModelError> {
+        let height = snap(arm[HEIGHT]);
+        if height != 0.0 {
+            effects.shoulder_height = Some(ShoulderHeight { height });
+        }
+
+        Plant::with_effects(Self::parameters(self.build, arm[0], arm[1]), effects)
+            .map_err(ModelError::Simulation)
+    }
+
+    /// The nominal record of `arm`: what the robot senses at every step,
+    /// noise off (cached).
+    fn nominal(&self, arm: Arm) -> Result<Arc<Vec<Reading>>, ModelError> {
+        let key = arm.map(snap);
         if let Ok(cache) = self.nominal.lock() {
             if let Some((_, record)) = cache.iter().find(|(k, _)| *k == key) {
                 return Ok(Arc::clone(record));
             }
         }
-        let plant = Plant::new(params).map_err(ModelError::Simulation)?;
+        let plant = self.plant(arm, Effects::default())?;
         let mut record = Vec::with_capacity(self.steps.last().map_or(1, |s| s + 1));
         self.run(plant, |_, s| record.push(s));
         let record = Arc::new(record);
@@ -554,10 +665,9 @@ impl ArmModel {
         self.series(measurement::measured(nominal, &self.steps, effects))
     }
 
-    /// The plant of arm `l1`, `l2` re-run with `effects`, noise off.
-    fn simulated(&self, (l1, l2): (f64, f64), effects: Effects) -> Result<Series, ModelError> {
-        let plant = Plant::with_effects(Self::parameters(self.build, l1, l2), effects)
-            .map_err(ModelError::Simulation)?;
+    /// The plant of `arm` re-run with `effects`, noise off.
+    fn simulated(&self, arm: Arm, effects: Effects) -> Result<Series, ModelError> {
+        let plant = self.plant(arm, effects)?;
         let mut rows = Vec::with_capacity(self.steps.len());
         let mut next = self.steps.iter().peekable();
         self.run(plant, |k, s| {
@@ -594,13 +704,18 @@ impl Model for ArmModel {
         };
         let anchor = self.anchor(&lin, &applied);
         let at = self.at_reference(anchor, &applied)?;
-        let delta = [arm.0 - anchor.0, arm.1 - anchor.1];
+        let delta: Vec<f64> = arm.iter().zip(&anchor).map(|(a, b)| a - b).collect();
         let mut out = Series::with_capacity(at.signals(), at.samples());
         let mut row = vec![0.0; at.signals()];
         for i in 0..at.samples() {
             let (j1, j2) = (lin.jacobian[0].row(i), lin.jacobian[1].row(i));
             for (s, value) in row.iter_mut().enumerate() {
                 *value = at.row(i)[s] + j1[s] * delta[0] + j2[s] * delta[1];
+            }
+            for (j, d) in lin.jacobian.iter().zip(&delta).skip(2) {
+                for (s, value) in row.iter_mut().enumerate() {
+                    *value += j.row(i)[s] * d;
+                }
             }
             out.push(&row)?;
         }
@@ -618,21 +733,21 @@ impl Model for ArmModel {
         let at = self.at_reference(anchor, &effects).ok()?;
         let observed = &self.data.observed;
         let scales = &self.data.scales;
-        let mut solve = LengthSolve::default();
+        let dims = lin.jacobian.len();
+        let mut solve = LengthSolve::new(dims);
+        let mut j = [0.0; ARM_PARAMETERS];
         for i in (0..at.samples()).filter(|i| mask.get(*i).copied().unwrap_or(false)) {
-            let (j1, j2, p, o) = (
-                lin.jacobian[0].row(i),
-                lin.jacobian[1].row(i),
-                at.row(i),
-                observed.row(i),
-            );
+            let (p, o) = (at.row(i), observed.row(i));
             for s in 0..scales.len() {
-                solve.add([j1[s], j2[s]], o[s] - p[s], scales[s]);
+                for (d, jd) in j.iter_mut().enumerate().take(dims) {
+                    *jd = lin.jacobian[d].row(i)[s];
+                }
+                solve.add(&j[..dims], o[s] - p[s], scales[s]);
             }
         }
         let delta = solve.solve()?;
         let parameters = &self.data.candidates[base].parameters;
-        let values: Vec<f64> = [anchor.0, anchor.1]
+        let values: Vec<f64> = anchor[..dims]
             .iter()
             .zip(delta)
             .zip(parameters)
@@ -676,7 +791,8 @@ impl Model for ArmModel {
         let measurement_side = MEASUREMENT_SIDE.contains(&c.name);
         match (c.name, c.parameters.as_slice()) {
             // The kernel's estimate (the centre) and a coarse grid around it.
-            (ARM, _) => grid(2, 3),
+            // (A person's: the centre alone; the solve finds the rest.)
+            (ARM, parameters) => grid(parameters.len(), if parameters.len() > 2 { 1 } else { 3 }),
             ("active_torque", [amp, freq]) => {
                 // The cost is periodic-multimodal in the frequency, with
                 // a valley about 1 / (10 · duration) Hz wide whatever the

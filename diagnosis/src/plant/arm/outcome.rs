@@ -12,6 +12,7 @@ use super::model::{ArmError, ArmModel, Lengths};
 use crate::engine::{select, EngineError, Gap, Options, Problem, Progress, Ranked, Selection};
 use crate::holdout::{HoldOut, TooShort};
 use crate::locate::Location;
+use limb_sim::effects::ShoulderHeight;
 use limb_sim::log::Record;
 use limb_sim::ArmBuild;
 use serde::Serialize;
@@ -75,7 +76,9 @@ pub struct Arm {
     /// Forearm length (elbow to grasp) [m].
     pub l2: f64,
     /// Shoulder at rest [m] (x, z): (l1 + l2, 0) with the arm straight
-    /// at the grasp.
+    /// at the grasp; on a person's build, where the fitted shoulder
+    /// height puts it (`shoulder_height`: (l2 + l1 cos r, height), r =
+    /// −asin(height / l1)).
     pub shoulder: [f64; 2],
     /// The lengths were given (held fixed), not fitted.
     pub given: bool,
@@ -136,17 +139,22 @@ impl Diagnosis {
             (None, Some(_)) => UNEXPLAINED.to_string(),
             (None, None) => "none".to_string(),
         };
-        let (l1, l2) = match model.lengths() {
-            Lengths::Given(l1, l2) => (l1, l2),
+        let (l1, l2, height) = match model.lengths() {
+            Lengths::Given(l1, l2) => (l1, l2, 0.0),
             Lengths::Fitted => {
-                let get = |k: &str| selection.corrected.get(k).copied().unwrap_or(f64::NAN);
-                (get("l1"), get("l2"))
+                let get = |k: &str| selection.corrected.get(k).copied();
+                let length = |k: &str| get(k).unwrap_or(f64::NAN);
+                (length("l1"), length("l2"), get("height").unwrap_or(0.0))
             }
+        };
+        let shoulder = match (ShoulderHeight { height }).rest(l1) {
+            Some(rest) => [l1 + l2 + rest.shift[0], rest.shift[1]],
+            None => [l1 + l2, f64::NAN],
         };
         let arm = Arm {
             l1,
             l2,
-            shoulder: [l1 + l2, 0.0],
+            shoulder,
             given: matches!(model.lengths(), Lengths::Given(..)),
             build: model.build().name(),
             estimate: model.start().map(|(a, b)| [a, b]),
