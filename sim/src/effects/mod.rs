@@ -184,7 +184,7 @@ pub struct Descriptor {
 }
 
 /// Every effect of `plant.md` (except `none`, the absence of effects): the
-/// ten of a robot's gap, then the four of a person's arm (`spec/human-arm.md`).
+/// ten of a robot's gap, then the five of a person's arm (`spec/human-arm.md`).
 pub const CATALOGUE: [Descriptor; 15] = [
     Descriptor {
         name: "joint_friction",

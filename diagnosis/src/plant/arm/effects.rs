@@ -166,13 +166,13 @@ pub fn arm_candidate(start: Option<(f64, f64)>, raised: bool) -> Candidate {
         Parameter::new("l2", "m", c, d, "forearm length"),
     ];
     if raised {
-        parameters.extend([Parameter::new(
+        parameters.push(Parameter::new(
             "height",
             "m",
             HEIGHT_RANGE[0],
             HEIGHT_RANGE[1],
             "shoulder centre's height above the elbow's at rest",
-        )]);
+        ));
     }
     Candidate {
         name: ARM,

@@ -602,7 +602,6 @@ impl ArmModel {
         if height != 0.0 {
             effects.shoulder_height = Some(ShoulderHeight { height });
         }
-
         Plant::with_effects(Self::parameters(self.build, arm[0], arm[1]), effects)
             .map_err(ModelError::Simulation)
     }
@@ -704,7 +703,7 @@ impl Model for ArmModel {
         };
         let anchor = self.anchor(&lin, &applied);
         let at = self.at_reference(anchor, &applied)?;
-        let delta: Vec<f64> = arm.iter().zip(&anchor).map(|(a, b)| a - b).collect();
+        let delta: Arm = std::array::from_fn(|k| arm[k] - anchor[k]);
         let mut out = Series::with_capacity(at.signals(), at.samples());
         let mut row = vec![0.0; at.signals()];
         for i in 0..at.samples() {
