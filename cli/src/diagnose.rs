@@ -159,6 +159,9 @@ fn facts(d: &Diagnosis) -> Vec<(String, String)> {
             ),
         ));
     }
+    if let Some(resolution) = a.resolution_text() {
+        facts.push(("how finely the log tells the arm".to_string(), resolution));
+    }
     facts.push((
         "unexplained".to_string(),
         match &d.unexplained {
@@ -205,6 +208,9 @@ fn human(d: &Diagnosis) -> String {
             (false, None) => " (fitted, corrected for the effects)".to_string(),
         }
     );
+    if let Some(resolution) = a.resolution_text() {
+        text += &format!("         {resolution}\n");
+    }
     if let Some(u) = &d.unexplained {
         text += &format!(
             "unexplained {:.1} % of the gap, {}",

@@ -222,6 +222,10 @@ pub struct Selection {
     /// The chosen effects' predictions on the held-out side.
     #[serde(skip)]
     pub predictions: Predictions,
+    /// The chosen set as the model takes it: the base's values first
+    /// (when the model has one), then each added effect's.
+    #[serde(skip)]
+    pub chosen: Vec<Applied>,
     /// Cost evaluations (simulations) spent.
     pub evaluations: usize,
 }
@@ -830,6 +834,7 @@ pub fn select(
             chosen: Some(chosen_prediction),
         },
         evaluations,
+        chosen,
     })
 }
 

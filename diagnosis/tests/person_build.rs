@@ -11,6 +11,8 @@
 use limb_diagnosis::plant::arm::blind::simulate_on;
 use limb_diagnosis::plant::arm::{diagnose, ArmBuild, Diagnosis, Lengths};
 use limb_sim::effects::Effect;
+use limb_sim::log::Record;
+use limb_sim::{scripted, ArmParameters, Plant, PlantParameters};
 
 /// A held-out arm of a person's proportions (not the reference person's
 /// lengths, so the cube law is exercised) and its noise seed.
@@ -107,4 +109,46 @@ fn a_cast_leaves_the_arm_within_3_mm() {
 
 fn cast() -> Effect {
     Effect::new("mass_mismatch", &[("factor", 1.5)]).unwrap()
+}
+
+/// A log that ends before the upper arm leaves the table holds nothing
+/// of the upper arm's length: the wrist's path and wrench do not move
+/// with l1 while the table bears the upper arm. The diagnosis says so
+/// (`arm.resolution` null for l1, `arm.unresolved` names it) instead of
+/// passing the fit's l1 off as the arm's; the forearm, which did move, is
+/// told finely. The whole log tells both (the `cast` MyoArm subject,
+/// whose lift ended at its force margin before the upper arm rose, read
+/// 209 mm long without this).
+#[test]
+fn a_length_the_log_holds_nothing_of_is_reported_as_not_resolved() {
+    let records = simulate_on(ArmBuild::Person, ARM.0, ARM.1, SEED, &[]).unwrap();
+    // When the upper arm leaves the table, from the same run's truth
+    // (which the diagnosis's records do not carry).
+    let truth: Vec<Record> = {
+        let mut params = PlantParameters::new(ARM.0, ARM.1);
+        params.arm = ArmParameters::built(ArmBuild::Person, ARM.0, ARM.1);
+        params.seed = SEED;
+        let mut plant = Plant::new(params).unwrap();
+        let rows = scripted::estimation_run(&mut plant).unwrap();
+        rows.iter().map(Record::from_row).collect()
+    };
+    let rest = truth[0].truth.unwrap().q[0];
+    let lifted = truth
+        .iter()
+        .position(|r| r.truth.is_some_and(|t| t.q[0] > rest + 1e-4))
+        .unwrap();
+    let forearm_only = &records[..lifted];
+    assert!(forearm_only.last().unwrap().time > 5.0, "{lifted} samples");
+    let read = |records| {
+        diagnose(Lengths::Fitted, ArmBuild::Person, records, 2, &|_| {})
+            .unwrap()
+            .diagnosis
+            .arm
+    };
+    let arm = read(forearm_only);
+    assert_eq!(arm.unresolved, ["l1"], "{arm:?}");
+    let [l1, l2] = arm.resolution.unwrap();
+    assert!(l1.is_none() && l2.is_some_and(|r| r < 0.001), "{arm:?}");
+    let whole = read(&records);
+    assert!(whole.unresolved.is_empty(), "{whole:?}");
 }

@@ -130,6 +130,11 @@ pub const ARM: &str = "arm";
 /// arm's third parameter on a person's build; `shoulder_height`'s allowed
 /// range, less its top).
 pub const HEIGHT_RANGE: [f64; 2] = [0.0, 0.2];
+/// Most of l1 the shoulder's height may be (the sine of the upper arm's
+/// slope at rest, 30°): the plant refuses a height of l1 or more, and the
+/// linearised fit must not step where the plant cannot follow. MyoArm's
+/// subjects rest at 0.15 (q1 −0.15 rad).
+pub const HEIGHT_SHARE: f64 = 0.5;
 
 /// Where the arm's fit starts: the kernel's estimate of the lengths and,
 /// on a person's build, of the shoulder's height above the elbow.

@@ -24,7 +24,7 @@
 //! measurement noise n, since the real sensor rounds its noisy reading.
 
 use super::effects::{
-    arm_candidate, candidates, kernel_estimate, resolution, Start, ARM, HEIGHT_RANGE,
+    arm_candidate, candidates, kernel_estimate, resolution, Start, ARM, HEIGHT_RANGE, HEIGHT_SHARE,
 };
 use super::replay::Replay;
 use crate::model::{grid, Applied, Data, Hints, Model, ModelError, Series, Signal};
@@ -173,6 +173,14 @@ struct Linearisation {
     jacobian: Vec<Series>,
 }
 
+/// Least information [1/m², in noise variances] a residual set must hold
+/// of an arm parameter for the parameter to be solved: a metre's change
+/// that moves the sum of squared scaled residuals by less than one noise
+/// variance is no information (the l1 column of a log whose upper arm
+/// never left the table is 0, or finite differences' rounding; a length
+/// the log does tell has 10⁸ or more).
+const LEAST_INFORMATION: f64 = 1.0;
+
 /// The normal equations of a weighted least-squares change of the arm's
 /// parameters (l1, l2, and the shoulder's height when it is fitted):
 /// terms added one residual at a time, then solved.
@@ -207,12 +215,71 @@ impl LengthSolve {
     }
 
     /// The change of the parameters that fits the residuals best (the
-    /// unused ones 0); `None` when the equations are singular or not
-    /// finite.
+    /// unused ones 0); a parameter the residuals hold no information of
+    /// (below [`LEAST_INFORMATION`]) is held (0): its step would be the
+    /// noise's. `None` when the informative parameters cannot be told
+    /// apart (singular) or the equations are not finite.
     pub(super) fn solve(&self) -> Option<Arm> {
-        let (a, b) = (&self.normal, &self.right);
-        let mut x = [0.0; ARM_PARAMETERS];
+        let informative = self.informative();
+        if informative.len() == self.dims {
+            return self.solve_for(&self.right);
+        }
+        let (reduced, right) = self.reduced(&informative, &self.right);
+        let x = eliminate(&reduced, &right, informative.len())?;
+        let mut out = [0.0; ARM_PARAMETERS];
+        for (position, k) in informative.iter().enumerate() {
+            out[*k] = x[position];
+        }
+        Some(out)
+    }
+
+    /// The diagonal of the inverse of the normal equations over the
+    /// informative parameters: with residuals of unit weight, each one's
+    /// variance when the others are solved with it. `None` for a
+    /// parameter with no information, and for all when the informative
+    /// ones cannot be told apart (singular).
+    pub(super) fn inverse_diagonal(&self) -> [Option<f64>; ARM_PARAMETERS] {
+        let mut out = [None; ARM_PARAMETERS];
+        let informative = self.informative();
+        for (position, k) in informative.iter().enumerate() {
+            let mut unit = [0.0; ARM_PARAMETERS];
+            unit[*k] = 1.0;
+            let (reduced, unit) = self.reduced(&informative, &unit);
+            let Some(x) = eliminate(&reduced, &unit, informative.len()) else {
+                return [None; ARM_PARAMETERS];
+            };
+            out[*k] = Some(x[position]);
+        }
+        out
+    }
+
+    /// The parameters the residuals hold information of: a diagonal of
+    /// the normal equations of at least [`LEAST_INFORMATION`].
+    fn informative(&self) -> Vec<usize> {
+        (0..self.dims)
+            .filter(|k| self.normal[*k][*k] >= LEAST_INFORMATION)
+            .collect()
+    }
+
+    /// The normal equations and right side `b` of the `kept` parameters
+    /// alone, in their order.
+    fn reduced(&self, kept: &[usize], b: &Arm) -> ([[f64; ARM_PARAMETERS]; ARM_PARAMETERS], Arm) {
+        let mut normal = [[0.0; ARM_PARAMETERS]; ARM_PARAMETERS];
+        let mut right = [0.0; ARM_PARAMETERS];
+        for (row, p) in kept.iter().enumerate() {
+            right[row] = b[*p];
+            for (column, q) in kept.iter().enumerate() {
+                normal[row][column] = self.normal[*p][*q];
+            }
+        }
+        (normal, right)
+    }
+
+    /// The change x with `normal` x = `b`.
+    fn solve_for(&self, b: &Arm) -> Option<Arm> {
+        let a = &self.normal;
         if self.dims == 2 {
+            let mut x = [0.0; ARM_PARAMETERS];
             let det = a[0][0] * a[1][1] - a[0][1] * a[1][0];
             if !(det.is_finite() && det.abs() > 0.0) {
                 return None;
@@ -221,48 +288,55 @@ impl LengthSolve {
             x[1] = (a[0][0] * b[1] - a[1][0] * b[0]) / det;
             return Some(x);
         }
-        // Gaussian elimination with partial pivoting, each row scaled by
-        // its diagonal first (the parameters' units differ).
-        let n = self.dims;
-        let mut m = *a;
-        let mut rhs = *b;
-        let scale: Vec<f64> = (0..n).map(|i| m[i][i].abs().sqrt()).collect();
-        if scale.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
+        eliminate(a, b, self.dims)
+    }
+}
+
+/// The x with `a` x = `b` in the first `n` parameters (the others 0):
+/// Gaussian elimination with partial pivoting, each row scaled by its
+/// diagonal first (the parameters' units differ). `None` when singular
+/// or not finite.
+fn eliminate(a: &[[f64; ARM_PARAMETERS]; ARM_PARAMETERS], b: &Arm, n: usize) -> Option<Arm> {
+    let n = n.min(ARM_PARAMETERS);
+    let mut x = [0.0; ARM_PARAMETERS];
+    let mut m = *a;
+    let mut rhs = *b;
+    let scale: Vec<f64> = (0..n).map(|i| m[i][i].abs().sqrt()).collect();
+    if scale.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
+        return None;
+    }
+    for i in 0..n {
+        rhs[i] /= scale[i];
+        for k in 0..n {
+            m[i][k] /= scale[i] * scale[k];
+        }
+    }
+    for column in 0..n {
+        let pivot =
+            (column..n).max_by(|p, q| m[*p][column].abs().total_cmp(&m[*q][column].abs()))?;
+        m.swap(column, pivot);
+        rhs.swap(column, pivot);
+        let diagonal = m[column][column];
+        if !(diagonal.is_finite() && diagonal.abs() > 1e-12) {
             return None;
         }
-        for i in 0..n {
-            rhs[i] /= scale[i];
-            for k in 0..n {
-                m[i][k] /= scale[i] * scale[k];
+        let pivot_row = m[column];
+        for row in column + 1..n {
+            let factor = m[row][column] / diagonal;
+            for (target, p) in m[row].iter_mut().zip(&pivot_row).take(n).skip(column) {
+                *target -= factor * p;
             }
+            rhs[row] -= factor * rhs[column];
         }
-        for column in 0..n {
-            let pivot =
-                (column..n).max_by(|p, q| m[*p][column].abs().total_cmp(&m[*q][column].abs()))?;
-            m.swap(column, pivot);
-            rhs.swap(column, pivot);
-            let diagonal = m[column][column];
-            if !(diagonal.is_finite() && diagonal.abs() > 1e-12) {
-                return None;
-            }
-            let pivot_row = m[column];
-            for row in column + 1..n {
-                let factor = m[row][column] / diagonal;
-                for (target, p) in m[row].iter_mut().zip(&pivot_row).take(n).skip(column) {
-                    *target -= factor * p;
-                }
-                rhs[row] -= factor * rhs[column];
-            }
-        }
-        for row in (0..n).rev() {
-            let known: f64 = (row + 1..n).map(|k| m[row][k] * x[k]).sum();
-            x[row] = (rhs[row] - known) / m[row][row];
-        }
-        for (value, s) in x.iter_mut().zip(&scale) {
-            *value /= s;
-        }
-        x.iter().all(|v| v.is_finite()).then_some(x)
     }
+    for row in (0..n).rev() {
+        let known: f64 = (row + 1..n).map(|k| m[row][k] * x[k]).sum();
+        x[row] = (rhs[row] - known) / m[row][row];
+    }
+    for (value, s) in x.iter_mut().zip(&scale) {
+        *value /= s;
+    }
+    x.iter().all(|v| v.is_finite()).then_some(x)
 }
 
 /// Name of the effect whose prediction is anchored apart (see
@@ -554,6 +628,59 @@ impl ArmModel {
         self.start.map(|s| s.lengths)
     }
 
+    /// How finely the log tells each length [m] (l1, l2), with the
+    /// effects `chosen` (the base among them) leaving a held-out gap of
+    /// `gap` [σ]: the change of the length that, with the arm's other
+    /// parameters solved with it and the effects held, raises the gap on
+    /// the `held` samples by `rise` [σ] (the least gain an effect must
+    /// show to be named: a length moved by less is as well supported by
+    /// the log as the fitted one). From the linearisation at `chosen`
+    /// (re-made there): the sum of squares rises by Δ² / (N⁻¹)ₖₖ, N the
+    /// held-out samples' normal matrix in the arm's parameters. A length
+    /// the held-out samples hold nothing of (its predictions do not move
+    /// with it: an upper arm that never left the table) is `None`, as
+    /// are both when N cannot tell them apart or the linearisation
+    /// cannot be made at `chosen`. `None` when the lengths are given.
+    pub fn resolution(
+        &self,
+        chosen: &[Applied],
+        held: &[bool],
+        gap: f64,
+        rise: f64,
+    ) -> Option<[Option<f64>; 2]> {
+        if self.lengths != Lengths::Fitted {
+            return None;
+        }
+        let lin = self
+            .recentre(chosen)
+            .then(|| self.current_linearisation())
+            .flatten();
+        let Some(lin) = lin else {
+            return Some([None, None]);
+        };
+        let dims = lin.jacobian.len();
+        let mut information = LengthSolve::new(dims);
+        let mut j = [0.0; ARM_PARAMETERS];
+        let mut terms = 0usize;
+        for i in (0..self.data.times.len()).filter(|i| held.get(*i).copied().unwrap_or(false)) {
+            for (s, sigma) in self.data.scales.iter().enumerate() {
+                for (d, jd) in j.iter_mut().enumerate().take(dims) {
+                    *jd = lin.jacobian[d].row(i)[s];
+                }
+                information.add(&j[..dims], 0.0, *sigma);
+                terms += 1;
+            }
+        }
+        let variance = information.inverse_diagonal();
+        let sum_of_squares = ((gap + rise).powi(2) - gap.powi(2)) * terms as f64;
+        let length = |k: usize| {
+            variance[k]
+                .map(|v| (sum_of_squares * v).sqrt())
+                .filter(|r| r.is_finite())
+        };
+        Some([length(0), length(1)])
+    }
+
     /// The arm in `applied` (the base's values: l1, l2 and on a person's
     /// build the shoulder's height), else the given one, else the start;
     /// and the effects without the base.
@@ -746,12 +873,15 @@ impl Model for ArmModel {
         }
         let delta = solve.solve()?;
         let parameters = &self.data.candidates[base].parameters;
-        let values: Vec<f64> = anchor[..dims]
+        let mut values: Vec<f64> = anchor[..dims]
             .iter()
             .zip(delta)
             .zip(parameters)
             .map(|((r, d), p)| (r + d).clamp(p.min, p.max))
             .collect();
+        if let [l1, _, height] = values.as_mut_slice() {
+            *height = height.min(HEIGHT_SHARE * *l1);
+        }
         let mut polished = applied.to_vec();
         match polished.iter_mut().find(|a| a.candidate == base) {
             Some(arm) => arm.values = values,

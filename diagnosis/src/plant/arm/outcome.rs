@@ -88,7 +88,43 @@ pub struct Arm {
     /// The kernel's estimate from the same log (`limb estimate`, auto),
     /// where the fit started, when fitted and the kernel had one.
     pub estimate: Option<[f64; 2]>,
+    /// How finely the log tells l1 and l2 [m] (fitted lengths only): the
+    /// change of each that, the arm's other parameters solved with it,
+    /// raises the held-out gap by [`MIN_GAIN`], the least an effect must
+    /// gain to be named ([`ArmModel::resolution`]); `null` for a length
+    /// the log holds nothing of.
+    pub resolution: Option<[Option<f64>; 2]>,
+    /// The fitted lengths the log does not tell to [`RESOLVED`]: their
+    /// value is the fit's, not the arm's (a lift that never raised the
+    /// upper arm holds nothing of l1).
+    pub unresolved: Vec<&'static str>,
 }
+
+impl Arm {
+    /// How finely the log tells the fitted lengths, in words (`None`
+    /// when the lengths were given): each length's resolution, and those
+    /// the log does not tell named as such.
+    pub fn resolution_text(&self) -> Option<String> {
+        let told = |name: &str, r: Option<f64>| match r {
+            Some(r) => format!("{name} to ±{:.1} mm", 1e3 * r),
+            None => format!("nothing of {name}"),
+        };
+        let [l1, l2] = self.resolution?;
+        let mut text = format!("the log tells {}, {}", told("l1", l1), told("l2", l2));
+        if !self.unresolved.is_empty() {
+            text += &format!(
+                "; NOT RESOLVED (coarser than {:.0} mm): {} — the value printed is the fit's, not the arm's",
+                1e3 * RESOLVED,
+                self.unresolved.join(", ")
+            );
+        }
+        Some(text)
+    }
+}
+
+/// Coarsest resolution [m] at which a fitted length is reported as told
+/// by the log (see [`Arm::unresolved`]).
+pub const RESOLVED: f64 = 0.01;
 
 /// The diagnosis of one arm log.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -120,7 +156,12 @@ pub struct Diagnosis {
 }
 
 impl Diagnosis {
-    fn from_selection(selection: &Selection, hold_out: HoldOut, model: &ArmModel) -> Self {
+    fn from_selection(
+        selection: &Selection,
+        hold_out: HoldOut,
+        model: &ArmModel,
+        resolution: Option<[Option<f64>; 2]>,
+    ) -> Self {
         let r = &selection.remaining;
         let gap = &selection.gap;
         // What remains is named when it is located beyond the noise and
@@ -158,6 +199,15 @@ impl Diagnosis {
             given: matches!(model.lengths(), Lengths::Given(..)),
             build: model.build().name(),
             estimate: model.start().map(|(a, b)| [a, b]),
+            resolution,
+            unresolved: resolution.map_or_else(Vec::new, |r| {
+                ["l1", "l2"]
+                    .into_iter()
+                    .zip(r)
+                    .filter(|(_, r)| r.is_none_or(|r| r > RESOLVED))
+                    .map(|(name, _)| name)
+                    .collect()
+            }),
         };
         Self {
             effect,
@@ -208,7 +258,7 @@ pub fn diagnose(
 ) -> Result<Diagnosed, DiagnoseError> {
     let model = ArmModel::new(lengths, build, records)?;
     let hold_out = HoldOut::default();
-    let selection = {
+    let (selection, resolution) = {
         let problem = Problem::split(&model, hold_out)?;
         let options = Options {
             threads,
@@ -217,9 +267,16 @@ pub fn diagnose(
             min_share: MIN_SHARE,
             ..Options::default()
         };
-        select(&problem, &options, progress)?
+        let selection = select(&problem, &options, progress)?;
+        let resolution = model.resolution(
+            &selection.chosen,
+            &problem.held.mask,
+            selection.gap.after,
+            MIN_GAIN,
+        );
+        (selection, resolution)
     };
-    let diagnosis = Diagnosis::from_selection(&selection, hold_out, &model);
+    let diagnosis = Diagnosis::from_selection(&selection, hold_out, &model, resolution);
     Ok(Diagnosed {
         model,
         selection,
