@@ -1068,3 +1068,71 @@ impl ArmModel {
         (time.is_finite() && change.is_finite()).then_some((time, change))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::LengthSolve;
+
+    /// Residuals of a linear model r = J x, one per row of `rows` (J's
+    /// row), noise σ 1.
+    fn solve_of(dims: usize, rows: &[[f64; 3]], x: [f64; 3]) -> LengthSolve {
+        let mut solve = LengthSolve::new(dims);
+        for j in rows {
+            let r: f64 = j.iter().zip(x).map(|(a, b)| a * b).sum();
+            solve.add(&j[..dims], r, 1.0);
+        }
+        solve
+    }
+
+    const ROWS: [[f64; 3]; 4] = [
+        [1.0, 0.5, 2.0],
+        [0.2, 1.0, -1.0],
+        [1.5, -0.3, 0.4],
+        [0.1, 0.7, 0.9],
+    ];
+
+    #[test]
+    fn the_solve_finds_a_linear_models_parameters() {
+        let x = [0.01, -0.02, 0.03];
+        let found = solve_of(3, &ROWS, x).solve().unwrap();
+        for (f, t) in found.iter().zip(x) {
+            assert!((f - t).abs() < 1e-12, "{found:?}");
+        }
+    }
+
+    /// A parameter no residual moves with (an upper arm that never left
+    /// the table) is held at 0 and the others are solved without it;
+    /// solved with it, the equations are singular and nothing would move.
+    #[test]
+    fn the_solve_holds_a_parameter_the_residuals_do_not_see() {
+        let blind: Vec<[f64; 3]> = ROWS.iter().map(|r| [0.0, r[1], r[2]]).collect();
+        let found = solve_of(3, &blind, [0.0, -0.02, 0.03]).solve().unwrap();
+        assert_eq!(found[0], 0.0);
+        assert!((found[1] + 0.02).abs() < 1e-12 && (found[2] - 0.03).abs() < 1e-12);
+        let variance = solve_of(3, &blind, [0.0; 3]).inverse_diagonal();
+        assert!(variance[0].is_none() && variance[1].is_some() && variance[2].is_some());
+    }
+
+    /// The inverse's diagonal is the inverse's: N · N⁻¹'s columns checked
+    /// through the solve of each unit vector.
+    #[test]
+    fn the_inverse_diagonal_is_the_normal_matrixs_inverses() {
+        let solve = solve_of(3, &ROWS, [0.0; 3]);
+        let variance = solve.inverse_diagonal();
+        for (k, v) in variance.iter().enumerate().take(3) {
+            let mut unit = [0.0; 3];
+            unit[k] = 1.0;
+            let column = solve.solve_for(&unit).unwrap();
+            let v = v.unwrap();
+            assert!(
+                (v - column[k]).abs() <= 1e-12 * v.abs(),
+                "{k}: {v} {column:?}"
+            );
+            // N · column = unit.
+            for (row, expected) in solve.normal.iter().zip(unit).take(3) {
+                let product: f64 = row.iter().zip(column).map(|(a, b)| a * b).sum();
+                assert!((product - expected).abs() < 1e-9, "{product} {expected}");
+            }
+        }
+    }
+}
