@@ -113,7 +113,7 @@ impl Arm {
         let mut text = format!("the log tells {}, {}", told("l1", l1), told("l2", l2));
         if !self.unresolved.is_empty() {
             text += &format!(
-                "; NOT RESOLVED (coarser than {:.0} mm): {} — the value printed is the fit's, not the arm's",
+                "; NOT RESOLVED (coarser than {:.0} mm): {} — its value, and the shoulder's that follows from it, are the fit's, not the arm's",
                 1e3 * RESOLVED,
                 self.unresolved.join(", ")
             );
