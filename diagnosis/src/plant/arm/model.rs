@@ -241,10 +241,10 @@ impl LengthSolve {
     pub(super) fn inverse_diagonal(&self) -> [Option<f64>; ARM_PARAMETERS] {
         let mut out = [None; ARM_PARAMETERS];
         let informative = self.informative();
+        let (reduced, _) = self.reduced(&informative, &self.right);
         for (position, k) in informative.iter().enumerate() {
             let mut unit = [0.0; ARM_PARAMETERS];
-            unit[*k] = 1.0;
-            let (reduced, unit) = self.reduced(&informative, &unit);
+            unit[position] = 1.0;
             let Some(x) = eliminate(&reduced, &unit, informative.len()) else {
                 return [None; ARM_PARAMETERS];
             };
@@ -658,19 +658,8 @@ impl ArmModel {
         let Some(lin) = lin else {
             return Some([None, None]);
         };
-        let dims = lin.jacobian.len();
-        let mut information = LengthSolve::new(dims);
-        let mut j = [0.0; ARM_PARAMETERS];
-        let mut terms = 0usize;
-        for i in (0..self.data.times.len()).filter(|i| held.get(*i).copied().unwrap_or(false)) {
-            for (s, sigma) in self.data.scales.iter().enumerate() {
-                for (d, jd) in j.iter_mut().enumerate().take(dims) {
-                    *jd = lin.jacobian[d].row(i)[s];
-                }
-                information.add(&j[..dims], 0.0, *sigma);
-                terms += 1;
-            }
-        }
+        let (information, terms) =
+            self.normal_equations(&lin, held, self.data.times.len(), |_, _| 0.0);
         let variance = information.inverse_diagonal();
         let sum_of_squares = ((gap + rise).powi(2) - gap.powi(2)) * terms as f64;
         let length = |k: usize| {
@@ -679,6 +668,33 @@ impl ArmModel {
                 .filter(|r| r.is_finite())
         };
         Some([length(0), length(1)])
+    }
+
+    /// The normal equations of the arm's parameters over the `mask`ed
+    /// samples of the first `samples`, with `lin`'s derivative and the
+    /// residual `residual(sample, signal)`, each of weight 1/σ²; and how
+    /// many terms they hold. Sample by sample, signal by signal.
+    fn normal_equations(
+        &self,
+        lin: &Linearisation,
+        mask: &[bool],
+        samples: usize,
+        residual: impl Fn(usize, usize) -> f64,
+    ) -> (LengthSolve, usize) {
+        let dims = lin.jacobian.len();
+        let mut solve = LengthSolve::new(dims);
+        let mut j = [0.0; ARM_PARAMETERS];
+        let mut terms = 0;
+        for i in (0..samples).filter(|i| mask.get(*i).copied().unwrap_or(false)) {
+            for (s, sigma) in self.data.scales.iter().enumerate() {
+                for (d, jd) in j.iter_mut().enumerate().take(dims) {
+                    *jd = lin.jacobian[d].row(i)[s];
+                }
+                solve.add(&j[..dims], residual(i, s), *sigma);
+                terms += 1;
+            }
+        }
+        (solve, terms)
     }
 
     /// The arm in `applied` (the base's values: l1, l2 and on a person's
@@ -858,19 +874,10 @@ impl Model for ArmModel {
         let anchor = self.anchor(&lin, &effects);
         let at = self.at_reference(anchor, &effects).ok()?;
         let observed = &self.data.observed;
-        let scales = &self.data.scales;
         let dims = lin.jacobian.len();
-        let mut solve = LengthSolve::new(dims);
-        let mut j = [0.0; ARM_PARAMETERS];
-        for i in (0..at.samples()).filter(|i| mask.get(*i).copied().unwrap_or(false)) {
-            let (p, o) = (at.row(i), observed.row(i));
-            for s in 0..scales.len() {
-                for (d, jd) in j.iter_mut().enumerate().take(dims) {
-                    *jd = lin.jacobian[d].row(i)[s];
-                }
-                solve.add(&j[..dims], o[s] - p[s], scales[s]);
-            }
-        }
+        let (solve, _) = self.normal_equations(&lin, mask, at.samples(), |i, s| {
+            observed.row(i)[s] - at.row(i)[s]
+        });
         let delta = solve.solve()?;
         let parameters = &self.data.candidates[base].parameters;
         let mut values: Vec<f64> = anchor[..dims]
