@@ -121,18 +121,13 @@ pub(crate) fn any_request_of_known_targets() -> Request {
     }
 }
 
-/// [`any_request_of_known_targets`] but a stop, for a proof that takes
-/// the stop apart: its symbolic execution explores every arm of the
-/// choice, so an assumption that the request is not a stop would not
-/// spare it the stop's path (a stop replaces the state).
-pub(crate) fn any_request_of_known_targets_but_a_stop() -> Request {
-    match kani::any::<u8>() % 6 {
-        0 => Request::StartEstimation,
-        1 => Request::ApproveManipulation(MANIPULATION_TARGET),
-        2 => Request::ApproveManipulation(TARGET_BEYOND_THE_LIMITS),
-        3 => Request::ApproveManipulation(TARGET_NOT_FINITE),
-        4 => Request::FinishManipulation,
-        _ => Request::Reset,
+/// One of the three targets of [`any_request_of_known_targets`]:
+/// accepted, beyond the joint limits, not finite.
+pub(crate) fn any_known_target() -> JointAngles {
+    match kani::any::<u8>() % 3 {
+        0 => MANIPULATION_TARGET,
+        1 => TARGET_BEYOND_THE_LIMITS,
+        _ => TARGET_NOT_FINITE,
     }
 }
 

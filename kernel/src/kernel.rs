@@ -830,8 +830,8 @@ impl Kernel {
 mod verification {
     use super::*;
     use crate::kani_inputs::{
-        any_frame_or_at, any_request, any_request_of_known_targets,
-        any_request_of_known_targets_but_a_stop, validated_arm, HOLD, MANIPULATION_TARGET,
+        any_frame_or_at, any_known_target, any_request, any_request_of_known_targets,
+        validated_arm, HOLD, MANIPULATION_TARGET,
     };
     use crate::kani_stubs::libm_stubbed;
     use crate::state::Validated;
@@ -1250,24 +1250,57 @@ mod verification {
         }
     }
 
+    /// REQ-SM-005, REQ-SM-002 in Estimate (see [`gating_from`]) for one
+    /// `request` that is not a stop: Estimate refuses it and changes
+    /// nothing. One harness per request, each on concrete values: over a
+    /// symbolic choice of the six requests Estimate refuses the proof was
+    /// not decided in 10 min (617 s: 6.0 M variables, 14 M clauses; 509 s
+    /// with only the state's kind compared), one request alone is decided
+    /// in about 3 min (real Kani, 2026-12-07). The stop is
+    /// [`verify_req_sm_005_gating_in_estimate_a_stop`]'s.
+    fn refused_in_estimate(request: Request) {
+        let (after, result) = gating_of(StateKind::Estimate, request);
+        assert_eq!(after, StateKind::Estimate);
+        kani::cover!(result.is_err(), "gating estimate: refused");
+    }
+
     libm_stubbed! { [hypot, sqrt, atan2, sin, cos]
-        /// REQ-SM-005, REQ-SM-002 in Estimate (see [`gating_from`]) for
-        /// any request but a stop: Estimate takes none of them. The stop
-        /// is [`verify_req_sm_005_gating_in_estimate_a_stop`]'s: with it
-        /// in one harness (the 2 kB estimate replaced by the stop on one
-        /// path and kept on the others) the proof was not decided in 10
-        /// min (619 s, 5.3 GiB); without it, neither (617 s: 6.0 M
-        /// variables, 14 M clauses, the same with the plan of a lift of
-        /// no length, whose numbers the stubs leave exact).
+        /// REQ-SM-005, REQ-SM-002: Estimate refuses a start of the
+        /// estimation ([`refused_in_estimate`]).
         #[cfg_attr(kani, kani::proof)]
         #[cfg_attr(kani, kani::unwind(24))]
-        pub(super) fn verify_req_sm_005_gating_in_estimate_but_a_stop() {
-            let (after, result) = gating_of(
-                StateKind::Estimate,
-                any_request_of_known_targets_but_a_stop(),
-            );
-            assert_eq!(after, StateKind::Estimate);
-            kani::cover!(result.is_err(), "gating estimate: refused");
+        pub(super) fn verify_req_sm_005_gating_in_estimate_refuses_a_start() {
+            refused_in_estimate(Request::StartEstimation);
+        }
+    }
+
+    libm_stubbed! { [hypot, sqrt, atan2, sin, cos]
+        /// REQ-SM-005, REQ-SM-002: Estimate refuses an approval of any of
+        /// the known targets ([`refused_in_estimate`]).
+        #[cfg_attr(kani, kani::proof)]
+        #[cfg_attr(kani, kani::unwind(24))]
+        pub(super) fn verify_req_sm_005_gating_in_estimate_refuses_an_approval() {
+            refused_in_estimate(Request::ApproveManipulation(any_known_target()));
+        }
+    }
+
+    libm_stubbed! { [hypot, sqrt, atan2, sin, cos]
+        /// REQ-SM-005, REQ-SM-002: Estimate refuses a finish of the
+        /// manipulation ([`refused_in_estimate`]).
+        #[cfg_attr(kani, kani::proof)]
+        #[cfg_attr(kani, kani::unwind(24))]
+        pub(super) fn verify_req_sm_005_gating_in_estimate_refuses_a_finish() {
+            refused_in_estimate(Request::FinishManipulation);
+        }
+    }
+
+    libm_stubbed! { [hypot, sqrt, atan2, sin, cos]
+        /// REQ-SM-005, REQ-SM-002: Estimate refuses a reset
+        /// ([`refused_in_estimate`]).
+        #[cfg_attr(kani, kani::proof)]
+        #[cfg_attr(kani, kani::unwind(24))]
+        pub(super) fn verify_req_sm_005_gating_in_estimate_refuses_a_reset() {
+            refused_in_estimate(Request::Reset);
         }
     }
 
@@ -1534,11 +1567,26 @@ mod verification {
                 verify_req_sm_006_a_request_keeps_the_stop,
             );
             kani::check("gating grasp", 1_000, verify_req_sm_005_gating_in_grasp);
-            kani::check(
-                "gating estimate: but a stop",
-                1_000,
-                verify_req_sm_005_gating_in_estimate_but_a_stop,
-            );
+            for (name, harness) in [
+                (
+                    "gating estimate: a start",
+                    verify_req_sm_005_gating_in_estimate_refuses_a_start as fn(),
+                ),
+                (
+                    "gating estimate: an approval",
+                    verify_req_sm_005_gating_in_estimate_refuses_an_approval,
+                ),
+                (
+                    "gating estimate: a finish",
+                    verify_req_sm_005_gating_in_estimate_refuses_a_finish,
+                ),
+                (
+                    "gating estimate: a reset",
+                    verify_req_sm_005_gating_in_estimate_refuses_a_reset,
+                ),
+            ] {
+                kani::check(name, 100, harness);
+            }
             kani::check(
                 "gating estimate: a stop",
                 100,

@@ -1,6 +1,9 @@
 //! Pass-through stand-ins for Kani's attribute macros, for
 //! `check.sh`: a type check of the kernel's cfg(kani) code, not a verifier.
-//! `stub(a, b)` also checks that both paths resolve.
+//! `stub(a, b)` also checks that both paths resolve: a free function's
+//! whole path, a method's type (a generic method's path alone does not
+//! type-check without its type arguments; Kani resolves the method when it
+//! runs).
 extern crate proc_macro;
 use proc_macro::{TokenStream, TokenTree};
 use std::str::FromStr;
@@ -31,7 +34,8 @@ pub fn stub(attr: TokenStream, item: TokenStream) -> TokenStream {
         let segs: Vec<&str> = p.split("::").collect();
         let method = segs.len() >= 2 && segs[segs.len() - 2].chars().next().unwrap().is_uppercase();
         if method {
-            checks.push_str(&format!("let _ = {p};"));
+            let ty = segs[..segs.len() - 1].join("::");
+            checks.push_str(&format!("let _ = core::marker::PhantomData::<{ty}>;"));
         } else {
             checks.push_str(&format!("#[allow(unused_imports)] use {p} as _;"));
         }

@@ -38,9 +38,17 @@ pub struct ResidualBias {
 }
 
 impl ResidualBias {
-    /// Adds the next point's residual [m].
+    /// Adds the next point's residual [m]. A block whose sum meets
+    /// infinities of both signs (a sum overflowed to −∞ by residuals near
+    /// −`f64::MAX`, then a point at infinity) has an unbounded mean: its
+    /// sum is +∞, not the NaN that ∞ − ∞ makes (found by real Kani).
     pub fn add(&mut self, residual: f64) {
-        self.sum += residual;
+        let opposite = self.sum.is_infinite() && residual.is_infinite() && self.sum != residual;
+        self.sum = if opposite {
+            f64::INFINITY
+        } else {
+            self.sum + residual
+        };
         self.count += 1;
         if self.count >= BIAS_BLOCK {
             self.close_block();
@@ -108,7 +116,11 @@ impl Circle {
     }
 
     /// Angle between the first and last point seen from the centre
-    /// [rad, 0..π]; 0 for fewer than two points.
+    /// [rad, 0..π]; 0 for fewer than two points, and for an end whose
+    /// offset from the centre is not finite (no arc is measured there).
+    /// Each offset is scaled to a largest component of ±1 before the
+    /// products, so no product overflows and no NaN is made (unscaled,
+    /// offsets near `f64::MAX` made ∞ − ∞).
     pub fn arc<I: Iterator<Item = Point>>(&self, points: I) -> f64 {
         let mut ends: Option<(Point, Point)> = None;
         for p in points {
@@ -119,9 +131,13 @@ impl Circle {
         }
         match ends {
             Some((a, b)) => {
-                let (ax, az) = (a.x - self.centre.x, a.z - self.centre.z);
-                let (bx, bz) = (b.x - self.centre.x, b.z - self.centre.z);
-                libm::fabs(libm::atan2(ax * bz - az * bx, ax * bx + az * bz))
+                let direction = |p: Point| unit_box(p.x - self.centre.x, p.z - self.centre.z);
+                match (direction(a), direction(b)) {
+                    (Some((ax, az)), Some((bx, bz))) => {
+                        libm::fabs(libm::atan2(ax * bz - az * bx, ax * bx + az * bz))
+                    }
+                    _ => 0.0,
+                }
             }
             None => 0.0,
         }
@@ -130,6 +146,19 @@ impl Circle {
     /// True when centre and radius are finite and the radius is > 0.
     pub fn is_valid(&self) -> bool {
         self.centre.is_finite() && self.radius.is_finite() && self.radius > 0.0
+    }
+}
+
+/// `(x, z)` scaled so that its larger |component| is 1 (the direction
+/// kept; zero stays zero); `None` when a component is not finite.
+fn unit_box(x: f64, z: f64) -> Option<(f64, f64)> {
+    let largest = libm::fabs(x).max(libm::fabs(z));
+    if !(x.is_finite() && z.is_finite()) {
+        None
+    } else if largest == 0.0 {
+        Some((0.0, 0.0))
+    } else {
+        Some((x / largest, z / largest))
     }
 }
 
