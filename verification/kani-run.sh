@@ -32,22 +32,38 @@ if ! cargo kani --version >/dev/null 2>&1; then
   exit 0
 fi
 version="$(cargo kani --version | awk '{print $2}')"
-mapfile -t all < <(grep -rh -A16 'kani::proof' kernel/src \
-  | awk '/kani::proof/ {p=1} p && /fn verify_req_/ {sub(/.*fn /, ""); sub(/\(.*/, ""); print; p=0}' | sort -u)
+# Every harness by its fully qualified name (Kani's `--exact` match: a
+# plain `--harness NAME` also runs every harness whose name NAME is a
+# prefix of, e.g. `…_step_from_grasp` and `…_step_from_grasp_at_a_bad_clock`
+# in one run). A file's module path is its path under kernel/src; the
+# harnesses of a file other than a `verification.rs` sit in its
+# `mod verification`.
+qualified() {
+  local f="${1#kernel/src/}"; f="${f%.rs}"; f="${f%/mod}"
+  local m="${f//\//::}"
+  [[ "$f" == */verification || "$f" == verification ]] || m="$m::verification"
+  echo "$m"
+}
+mapfile -t all < <(for f in $(grep -rl 'kani::proof' kernel/src); do
+  m="$(qualified "$f")"
+  grep -A16 'kani::proof' "$f" \
+    | awk -v m="$m" '/kani::proof/ {p=1} p && /fn verify_req_/ {sub(/.*fn /, ""); sub(/\(.*/, ""); print m "::" $0; p=0}'
+done | sort -u)
 if [ "$#" -gt 0 ]; then
   sel=()
-  for h in "${all[@]}"; do for f in "$@"; do [[ "$h" == *"$f"* ]] && sel+=("$h") && break; done; done
+  for q in "${all[@]}"; do for f in "$@"; do [[ "${q##*::}" == *"$f"* ]] && sel+=("$q") && break; done; done
 else
   sel=("${all[@]}")
 fi
 failed=0
 start_all=$(date +%s)
-for h in "${sel[@]}"; do
+for q in "${sel[@]}"; do
+  h="${q##*::}"
   log="$logs/$h.log"
   t0=$(date +%s)
   /usr/bin/time -f '%M' -o "$logs/$h.rss" \
     cargo kani -p limb-kernel -Z stubbing -Z unstable-options \
-      --harness-timeout "$timeout" --harness "$h" ${KANI_ARGS:-} >"$log" 2>&1
+      --harness-timeout "$timeout" --exact --harness "$q" ${KANI_ARGS:-} >"$log" 2>&1
   rc=$?
   secs=$(( $(date +%s) - t0 ))
   rss_mib=$(( $(tail -n1 "$logs/$h.rss" 2>/dev/null | tr -dc 0-9 || echo 0) / 1024 ))

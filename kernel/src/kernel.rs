@@ -888,9 +888,13 @@ mod verification {
     }
 
     /// One step with any frame (or a plausible one at `at`) at the clock
-    /// `t` or any non-finite clock, checked by [`check_step`]. The frame's
-    /// own time is any number, so its age at `t` is any too (fresh, stale,
-    /// from the future). A finite clock other than `t` would make the
+    /// `now`, checked by [`check_step`]. The frame's own time is any
+    /// number, so its age at `now` is any too (fresh, stale, from the
+    /// future). Each state's harnesses take one finite clock `t` and any
+    /// clock that is not finite ([`any_bad_clock`]) apart: with the clock
+    /// a symbolic choice of the two, no one-step harness was decided in
+    /// 10 min (the Grasp step: 645-654 s); at `t` alone the Grasp step is
+    /// decided in 296 s (real Kani, 2026-12-07). A finite clock other than `t` would make the
     /// state's time-dependent set-point (the lift's, the manipulation's)
     /// a symbolic polynomial, whose workspace bound no solver decides in
     /// the 10 min this proof has: that range is sampled by the proptests
@@ -901,24 +905,30 @@ mod verification {
     /// 230 kB value), a Grasp step whose running part was stubbed by an
     /// operator's stop was undecided in 10 min (its solver's first round
     /// never ended); borrowed, decided in 94 s (real Kani, 2026-12-06).
-    fn one_step(kernel: &mut Kernel, at: Pose, t: f64) -> Command {
-        one_step_where(kernel, at, t, |_| true)
+    fn one_step(kernel: &mut Kernel, at: Pose, now: f64) -> Command {
+        one_step_where(kernel, at, now, |_| true)
+    }
+
+    /// Any clock that is not finite: NaN (any payload) or ±∞ (drawn into
+    /// the domain, not assumed there: the sampling stand-in would reject
+    /// most draws).
+    fn any_bad_clock() -> f64 {
+        let drawn: f64 = kani::any();
+        if drawn.is_finite() {
+            f64::NAN
+        } else {
+            drawn
+        }
     }
 
     /// [`one_step`] with the frames `admit` admits.
     fn one_step_where(
         kernel: &mut Kernel,
         at: Pose,
-        t: f64,
+        now: f64,
         admit: impl Fn(&PathSample) -> bool,
     ) -> Command {
         let before = kernel.state().kind();
-        let drawn: f64 = kani::any();
-        let now = if kani::any() || drawn.is_finite() {
-            t
-        } else {
-            drawn
-        };
         let frame = any_frame_or_at(at, now);
         kani::assume(admit(&frame));
         let command = kernel.step(Some(&frame), now);
@@ -998,10 +1008,11 @@ mod verification {
     /// finite frames in time order: the only ones the kernel pushes). They
     /// take those parts' products and quotients of symbolic numbers out of
     /// the whole-step proofs; what the step composes of them (which state,
-    /// which stop, which check) stays real. The one-step harnesses are
-    /// still undecided in 10 min with them (the records in
-    /// `spec/requirements.toml`): a step's size, not only its arithmetic,
-    /// bounds them.
+    /// which stop, which check) stays real. With them, and the clock split
+    /// from the frame's choice ([`one_step`]), five of the eight one-step
+    /// harnesses are decided in 10 min; the Manipulate step at its time
+    /// and both Estimate steps are not (the records in
+    /// `spec/requirements.toml`).
     ///
     /// [`law_contract`]: crate::impedance::verification::law_contract
     /// [`limit_contract`]: crate::impedance::verification::limit_contract
@@ -1029,9 +1040,10 @@ mod verification {
 
     kernel_stubbed! { [hypot, sqrt]
         /// REQ-PANIC-001, REQ-CMD-001, REQ-MON-006, REQ-MON-007: one step from
-        /// Grasp with any frame (at the step's clock or a non-finite one)
-        /// never panics, commands within the limits and stops on any fault in
-        /// the same step.
+        /// Grasp with any frame at the step's clock never panics, commands
+        /// within the limits and stops on any fault in the same step (a
+        /// clock that is not finite:
+        /// [`verify_req_panic_001_step_from_grasp_at_a_bad_clock`]).
         #[cfg_attr(kani, kani::proof)]
         #[cfg_attr(kani, kani::unwind(12))]
         pub(super) fn verify_req_panic_001_step_from_grasp() {
@@ -1042,25 +1054,41 @@ mod verification {
         }
     }
 
+    kernel_stubbed! { [hypot, sqrt]
+        /// REQ-PANIC-001, REQ-CMD-001, REQ-MON-006, REQ-MON-007: one step from
+        /// Grasp with any frame at any clock that is not finite never
+        /// panics, commands within the limits and stops.
+        #[cfg_attr(kani, kani::proof)]
+        #[cfg_attr(kani, kani::unwind(12))]
+        pub(super) fn verify_req_panic_001_step_from_grasp_at_a_bad_clock() {
+            let (mut kernel, at) = kernel_in(StateKind::Grasp);
+            let command = one_step(&mut kernel, at, any_bad_clock());
+            kani::cover!(command.state == StateKind::SafeStop, "grasp step: stops");
+        }
+    }
+
+    /// The frames the Estimate step harnesses admit: a forearm elevation
+    /// not past lift-off (`LIFT_PSI`; NaN and -∞ included). A frame past
+    /// lift-off on the first sample turns the online estimate's phase
+    /// symbolic, and the solver then unrolls every later phase's loops
+    /// (the refinement's included) over a path it cannot bound: not
+    /// decided in 10 min; the lift's later steps are the sessions'
+    /// (proptest `arbitrary_sessions_keep_every_safety_property`).
+    fn not_past_lift_off(frame: &PathSample) -> bool {
+        frame.pose.psi.is_nan() || frame.pose.psi <= crate::estimation::online::LIFT_PSI
+    }
+
     kernel_stubbed! { [hypot, sqrt, atan2, sin, cos]
         /// REQ-PANIC-001, REQ-CMD-001, REQ-MON-006, REQ-MON-007, REQ-MON-012:
         /// one step during the estimation (the first of a fresh lift: one sample
         /// recorded into the online estimate, the lift shaped) with any frame
-        /// whose forearm elevation is not past lift-off (`LIFT_PSI`; NaN and
-        /// -∞ included), at the step's clock or a non-finite one, never
-        /// panics, commands within the limits and stops on any fault in the
-        /// same step. A frame past lift-off on the first sample turns the
-        /// online estimate's phase symbolic, and the solver then unrolls every
-        /// later phase's loops (the refinement's included) over a path it
-        /// cannot bound: not decided in 10 min; the lift's later steps are the
-        /// sessions' (proptest `arbitrary_sessions_keep_every_safety_property`).
+        /// [`not_past_lift_off`] at the step's clock never panics, commands
+        /// within the limits and stops on any fault in the same step.
         #[cfg_attr(kani, kani::proof)]
         #[cfg_attr(kani, kani::unwind(12))]
         pub(super) fn verify_req_panic_001_step_during_estimation() {
             let (mut kernel, at) = kernel_in(StateKind::Estimate);
-            let command = one_step_where(&mut kernel, at, 0.5, |frame| {
-                frame.pose.psi.is_nan() || frame.pose.psi <= crate::estimation::online::LIFT_PSI
-            });
+            let command = one_step_where(&mut kernel, at, 0.5, not_past_lift_off);
             kani::cover!(
                 command.state == StateKind::Estimate,
                 "estimate step: tracks"
@@ -1070,10 +1098,23 @@ mod verification {
     }
 
     kernel_stubbed! { [hypot, sqrt, atan2, sin, cos]
+        /// REQ-PANIC-001, REQ-CMD-001, REQ-MON-006, REQ-MON-007, REQ-MON-012:
+        /// [`verify_req_panic_001_step_during_estimation`] at any clock that
+        /// is not finite: the step stops.
+        #[cfg_attr(kani, kani::proof)]
+        #[cfg_attr(kani, kani::unwind(12))]
+        pub(super) fn verify_req_panic_001_step_during_estimation_at_a_bad_clock() {
+            let (mut kernel, at) = kernel_in(StateKind::Estimate);
+            let command = one_step_where(&mut kernel, at, any_bad_clock(), not_past_lift_off);
+            kani::cover!(command.state == StateKind::SafeStop, "estimate step: stops");
+        }
+    }
+
+    kernel_stubbed! { [hypot, sqrt, atan2, sin, cos]
         /// REQ-PANIC-001, REQ-CMD-001, REQ-MON-006, REQ-MON-007: one step in
-        /// Validated with any frame (at the step's clock or a non-finite one)
-        /// never panics, commands within the limits and stops on any fault in
-        /// the same step.
+        /// Validated with any frame at the step's clock never panics,
+        /// commands within the limits and stops on any fault in the same
+        /// step.
         #[cfg_attr(kani, kani::proof)]
         #[cfg_attr(kani, kani::unwind(24))]
         pub(super) fn verify_req_panic_001_step_in_validated() {
@@ -1091,10 +1132,26 @@ mod verification {
     }
 
     kernel_stubbed! { [hypot, sqrt, atan2, sin, cos]
+        /// REQ-PANIC-001, REQ-CMD-001, REQ-MON-006, REQ-MON-007: one step in
+        /// Validated with any frame at any clock that is not finite never
+        /// panics, commands within the limits and stops.
+        #[cfg_attr(kani, kani::proof)]
+        #[cfg_attr(kani, kani::unwind(24))]
+        pub(super) fn verify_req_panic_001_step_in_validated_at_a_bad_clock() {
+            let (mut kernel, at) = kernel_in(StateKind::Validated);
+            let command = one_step(&mut kernel, at, any_bad_clock());
+            kani::cover!(
+                command.state == StateKind::SafeStop,
+                "validated step: stops"
+            );
+        }
+    }
+
+    kernel_stubbed! { [hypot, sqrt, atan2, sin, cos]
         /// REQ-PANIC-001, REQ-CMD-001, REQ-MON-006, REQ-MON-007, REQ-MON-012:
-        /// one step while manipulating with any frame (at the step's clock or a
-        /// non-finite one) never panics, commands within the limits and stops
-        /// on any fault in the same step.
+        /// one step while manipulating with any frame at the step's clock
+        /// never panics, commands within the limits and stops on any fault
+        /// in the same step.
         #[cfg_attr(kani, kani::proof)]
         #[cfg_attr(kani, kani::unwind(24))]
         pub(super) fn verify_req_panic_001_step_while_manipulating() {
@@ -1104,6 +1161,22 @@ mod verification {
                 command.state == StateKind::Manipulate,
                 "manipulate step: tracks"
             );
+            kani::cover!(
+                command.state == StateKind::SafeStop,
+                "manipulate step: stops"
+            );
+        }
+    }
+
+    kernel_stubbed! { [hypot, sqrt, atan2, sin, cos]
+        /// REQ-PANIC-001, REQ-CMD-001, REQ-MON-006, REQ-MON-007, REQ-MON-012:
+        /// one step while manipulating with any frame at any clock that is
+        /// not finite never panics, commands within the limits and stops.
+        #[cfg_attr(kani, kani::proof)]
+        #[cfg_attr(kani, kani::unwind(24))]
+        pub(super) fn verify_req_panic_001_step_while_manipulating_at_a_bad_clock() {
+            let (mut kernel, at) = kernel_in(StateKind::Manipulate);
+            let command = one_step(&mut kernel, at, any_bad_clock());
             kani::cover!(
                 command.state == StateKind::SafeStop,
                 "manipulate step: stops"
@@ -1556,6 +1629,26 @@ mod verification {
                 5_000,
                 verify_req_panic_001_step_while_manipulating,
             );
+            for (name, harness) in [
+                (
+                    "step from grasp at a bad clock",
+                    verify_req_panic_001_step_from_grasp_at_a_bad_clock as fn(),
+                ),
+                (
+                    "step during estimation at a bad clock",
+                    verify_req_panic_001_step_during_estimation_at_a_bad_clock,
+                ),
+                (
+                    "step in validated at a bad clock",
+                    verify_req_panic_001_step_in_validated_at_a_bad_clock,
+                ),
+                (
+                    "step while manipulating at a bad clock",
+                    verify_req_panic_001_step_while_manipulating_at_a_bad_clock,
+                ),
+            ] {
+                kani::check(name, 1_000, harness);
+            }
             kani::check(
                 "latch: a step",
                 2_000,
