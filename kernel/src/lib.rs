@@ -58,6 +58,10 @@
     not(test),
     deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
 )]
+// Kani's `stub` attribute expands recursively, once per stub: a first
+// lift step's harness has thirteen (its libm functions, the step's proved
+// contracts, the estimation's later parts), past the default limit of 128.
+#![cfg_attr(kani, recursion_limit = "256")]
 
 // Kani's library under `cargo kani` (the crate is no_std, so it is not in
 // the prelude by itself).

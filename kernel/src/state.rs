@@ -328,12 +328,7 @@ impl Grasp {
         parameters: &EstimationMotionParameters,
     ) -> Result<Estimate, (Self, PlanError)> {
         match EstimationMotion::new(grasp, parameters) {
-            Ok(motion) => Ok(Estimate {
-                grasp,
-                online: OnlineEstimator::new(),
-                tilt: PlaneTilt::new(),
-                stage: EstimateStage::Lifting(ShapedLift::new(motion, now)),
-            }),
+            Ok(motion) => Ok(Estimate::lifting(grasp, motion, now)),
             Err(error) => Err((self, error)),
         }
     }
@@ -351,6 +346,17 @@ impl Default for Grasp {
 }
 
 impl Estimate {
+    /// A fresh estimation: the planned `motion` from `grasp` (frame S),
+    /// started at kernel time `now`, nothing recorded.
+    fn lifting(grasp: Pose, motion: EstimationMotion, now: f64) -> Self {
+        Estimate {
+            grasp,
+            online: OnlineEstimator::new(),
+            tilt: PlaneTilt::new(),
+            stage: EstimateStage::Lifting(ShapedLift::new(motion, now)),
+        }
+    }
+
     /// The grasp pose the motion started from (frame S).
     pub fn grasp_pose(&self) -> Pose {
         self.grasp
@@ -851,7 +857,7 @@ impl Validated {
 
 /// Proof of REQ-SM-003 and REQ-SM-006 at the level of the typed states.
 #[cfg(any(test, kani))]
-mod verification {
+pub(crate) mod verification {
     use super::*;
     use crate::config::SafetyLimits;
     use crate::kani_inputs::{validated_arm, HOLD, MANIPULATION_TARGET};
@@ -933,6 +939,54 @@ mod verification {
         assert!(stop.ramped_wrench(kani::any()).is_finite());
         let grasp = stop.reset();
         assert_eq!(grasp.held().map(SetPoint::hold), stop.hold());
+    }
+
+    /// A fresh estimation of the planned `motion` from `grasp` at `now`, as
+    /// [`Grasp::start_estimation`] makes it once the motion is planned,
+    /// for the proofs that start in Estimate: there the planning's result
+    /// under the libm stubs is symbolic (a duration is any number the
+    /// hypot stub allows, finite or not to symbolic execution), and an
+    /// estimate taken out of such a `Result` is symbolic in every field
+    /// (merged with the error's bytes): its online estimate, stage and
+    /// lift phase included, where the motion alone is.
+    pub(crate) fn lifting(grasp: Pose, motion: EstimationMotion, now: f64) -> Estimate {
+        Estimate::lifting(grasp, motion, now)
+    }
+
+    /// Stubs of the estimation's conclusion, for the harnesses of a
+    /// lift's first step (`kernel::verification`), where no conclusion
+    /// can be: the stage is Lifting and the lift has not settled (only a
+    /// later step's [`ShapedLift::settled`] ends it). Each fails the proof
+    /// if it is reached (Kani reports its assertion UNREACHABLE, i.e.
+    /// passed, only when no path of the harness gets there).
+    #[cfg(kani)]
+    pub(crate) mod stub {
+        use super::*;
+
+        /// Stub of `Conclusion::advance`.
+        pub(crate) fn conclusion_advance(
+            _: &mut Conclusion,
+            _: &GraspPath,
+            _: Pose,
+            _: &ValidationLimits,
+        ) -> Result<EstimateStep, StopReason> {
+            kani::assert(false, "a lift's first step reached the refinement");
+            Err(StopReason::EstimationFailed(
+                EstimateError::UpperArmPhaseTooShort,
+            ))
+        }
+
+        /// Stub of `Estimate::conclude`.
+        pub(crate) fn conclude(
+            _: &mut Estimate,
+            _: usize,
+            _: Pose,
+            _: LiftEnd,
+            _: &KernelConfig,
+        ) -> Result<(), StopReason> {
+            kani::assert(false, "a lift's first step concluded");
+            Ok(())
+        }
     }
 
     #[cfg(test)]

@@ -1,5 +1,6 @@
 //! A pass-through shim of the `kani` API for `check.sh` (type checking
-//! only: `any` returns a default value, `assume` and `cover!` do nothing).
+//! only: `any` returns a default value, `assume`, `assert` and `cover!` do
+//! nothing).
 pub use kani_macros::{proof, stub, unwind};
 pub trait Arbitrary {
     fn any() -> Self;
@@ -10,6 +11,7 @@ pub fn any<T: Arbitrary>() -> T {
     T::any()
 }
 pub fn assume(_c: bool) {}
+pub fn assert(_c: bool, _m: &'static str) {}
 #[macro_export]
 macro_rules! cover {
     ($c:expr, $m:literal) => {

@@ -49,6 +49,9 @@ struct KaniRun {
     mib: u32,
     /// Covers satisfied / covers.
     covers: String,
+    /// CBMC options the run took beside Kani's (`kani-run.sh`'s table).
+    #[serde(default)]
+    cbmc_args: Option<String>,
 }
 
 #[derive(Deserialize)]
@@ -229,8 +232,14 @@ fn table(spec: &Spec) -> String {
                     .and_then(|(_, name)| spec.kani.run.iter().find(|run| run.harness == name));
                 match run {
                     Some(run) => format!(
-                        "`{v}` ({}, {} s, {} MiB, covers {})",
-                        run.result, run.seconds, run.mib, run.covers
+                        "`{v}` ({}, {} s, {} MiB, covers {}{})",
+                        run.result,
+                        run.seconds,
+                        run.mib,
+                        run.covers,
+                        run.cbmc_args
+                            .as_ref()
+                            .map_or(String::new(), |args| format!(", CBMC `{args}`"))
                     ),
                     None => format!("`{v}`"),
                 }
