@@ -896,10 +896,11 @@ mod verification {
     /// clock that is not finite ([`any_bad_clock`]) apart: with the clock
     /// a symbolic choice of the two, no one-step harness was decided in
     /// 10 min (the Grasp step: 645-654 s); at `t` alone the Grasp step is
-    /// decided in 296 s (real Kani, 2026-12-07). A finite clock other than `t` would make the
-    /// state's time-dependent set-point (the lift's, the manipulation's)
-    /// a symbolic polynomial, whose workspace bound no solver decides in
-    /// the 10 min this proof has: that range is sampled by the proptests
+    /// decided in 296 s (real Kani, 2026-12-07). A finite clock other
+    /// than `t` would make the state's time-dependent set-point (the
+    /// lift's, the manipulation's) a symbolic polynomial, whose workspace
+    /// bound no solver decides in the 10 min this proof has: that range is
+    /// sampled by the proptests
     /// `req_mon_007_one_step_from_each_state_meets_the_check` and
     /// `arbitrary_sessions_keep_every_safety_property`, with this check.
     ///
@@ -940,12 +941,14 @@ mod verification {
     /// move's length from [`LOWERING_FROM`] are exact under the libm stubs
     /// (`crate::kani_stubs::stub`), so the plan, its `Ok` and the move are
     /// numbers to symbolic execution. Towards `MANIPULATION_TARGET` from
-    /// [`HOLD`] the plan's checks were symbolic, so the Manipulate state
-    /// taken out of its `Result` was symbolic in every field (merged with
-    /// the error's bytes), and the Manipulate step was undecided in 10 min
-    /// (629 s). [`LOWERING_FROM`] stands for any hold: the fixed arm
-    /// (l1 + l2 = 0.5 m) cannot hold its grasp there with psi = 0; the step
-    /// judges frames, not where the move started.
+    /// [`HOLD`] the plan's checks are symbolic, and the Manipulate state
+    /// taken out of its `Result` is merged with the error's bytes. With
+    /// this target the gating from Manipulate is verified in 194 s (540 s
+    /// before) and the Manipulate step's first solver round takes 80 s
+    /// (258-428 s); that step at its time is still undecided in 10 min
+    /// (real Kani, 2026-12-07). [`LOWERING_FROM`] stands for any hold:
+    /// the fixed arm (l1 + l2 = 0.5 m) cannot hold its grasp there with
+    /// psi = 0; the step judges frames, not where the move started.
     const TABLE_TARGET: JointAngles = JointAngles {
         shoulder_elevation: 0.0,
         elbow_flexion: 0.0,
@@ -965,12 +968,9 @@ mod verification {
             StateKind::Grasp => REST,
             StateKind::Estimate => {
                 // The motion planned as `Grasp::start_estimation` plans it,
-                // the estimate made of it as that makes it; not taken out
-                // of that function's `Result`, whose symbolic outcome under
-                // the stubs would merge every field of the estimate with
-                // the error's bytes (`state::verification::lifting`). With
-                // this and the libm stubs' exact values, the stop from
-                // Estimate is verified in 208 s (552 s before, real Kani).
+                // the estimate made of it as that makes it, not taken out
+                // of that function's `Result` (why and what it measured:
+                // `state::verification::lifting`).
                 let motion =
                     EstimationMotion::new(REST, &KernelConfig::default().estimation_motion);
                 kani::assume(motion.is_ok());
@@ -1071,9 +1071,13 @@ mod verification {
     /// fresh estimate gives, none (asserted: no provisional forearm).
     /// Symbolic execution cannot fold the fresh estimate's phase, stage
     /// and model out of the kernel's state (an enum, read through a union
-    /// of its variants), so without these it unrolled all of those
-    /// bodies: the two Estimate step harnesses were undecided in 10 min
-    /// (12.8 GiB).
+    /// of its variants), so without these it unrolled all of those bodies
+    /// and did not end in 10 min (12.8 GiB). With them it ends in about
+    /// 84 s, but the Estimate step harnesses are still undecided: the
+    /// formula's conversion does not end in 10 min, held up by the
+    /// kernel's 4 096-sample path buffer, which the step writes into (cut
+    /// to 64 samples in an experiment, not kept: 20 s; real Kani,
+    /// 2026-12-07).
     macro_rules! first_lift_step_stubbed {
         ([$($f:ident),+] $(#[$attr:meta])* $vis:vis fn $name:ident() $body:block) => {
             kernel_stubbed! { [$($f),+]
