@@ -1069,11 +1069,11 @@ mod verification {
     /// taken out of its `Result` is merged with the error's bytes. With
     /// this target the gating from Manipulate is verified in 194 s (540 s
     /// before) and the Manipulate step's first solver round takes 80 s
-    /// (258-428 s; the step is decided once its stop is stubbed by its
-    /// contract: [`stub::stop`]) (real Kani, 2026-12-07).
-    /// [`LOWERING_FROM`] stands for any hold:
-    /// the fixed arm (l1 + l2 = 0.5 m) cannot hold its grasp there with
-    /// psi = 0; the step judges frames, not where the move started.
+    /// (258-428 s); the step is decided once its stop is stubbed by its
+    /// contract, [`stub::stop`] (real Kani, 2026-12-07). [`LOWERING_FROM`]
+    /// stands for any hold: the fixed arm (l1 + l2 = 0.5 m) cannot hold its
+    /// grasp there with psi = 0; the step judges frames, not where the move
+    /// started.
     const TABLE_TARGET: JointAngles = JointAngles {
         shoulder_elevation: 0.0,
         elbow_flexion: 0.0,
@@ -1202,7 +1202,11 @@ mod verification {
     /// formula's conversion does not end in 10 min, held up by the
     /// kernel's 4 096-sample path buffer, which the step writes into (cut
     /// to 64 samples in an experiment, not kept: 20 s; real Kani,
-    /// 2026-12-07).
+    /// 2026-12-07). Past the conversion, the solver is held up by the
+    /// lift's duration, a formula under the libm stubs (the lift's goal
+    /// is planned through the sine and cosine of its angle): with a lift
+    /// planned straight up the lift's first step alone was decided in
+    /// 11-15 s (an experiment, not kept; README, Verification).
     macro_rules! first_lift_step_stubbed {
         ([$($f:ident),+] $(#[$attr:meta])* $vis:vis fn $name:ident() $body:block) => {
             kernel_stubbed! { [$($f),+]
