@@ -11,7 +11,7 @@
 use limb_kani_stand_in as kani;
 
 use crate::arm::JointAngles;
-use crate::config::ValidationLimits;
+use crate::config::{SafetyLimits, ValidationLimits};
 use crate::estimation::{ArmEstimate, FitEvidence, Method};
 use crate::geometry::{Point, Pose, PoseRate, Wrench};
 use crate::motion::SetPoint;
@@ -75,6 +75,38 @@ pub(crate) fn any_frame_or_at(pose: Pose, time: f64) -> PathSample {
             wrench: Wrench::ZERO,
         }
     }
+}
+
+/// [`any_frame_or_at`] as far as a running step's monitors pass it
+/// under `limits` on the frame alone: finite, each force component and
+/// the torque within their limits (the force monitor bounds the
+/// magnitude, no smaller than either component), on or above the table
+/// and inside the workspace box. The monitors judge each frame before the
+/// state's step ([`crate::kernel::Kernel::step`]), so a state's step meets
+/// only such frames.
+pub(crate) fn any_frame_the_monitors_pass(
+    pose: Pose,
+    time: f64,
+    limits: &SafetyLimits,
+) -> PathSample {
+    let frame = any_frame_or_at(pose, time);
+    kani::assume(the_monitors_pass(&frame, limits));
+    frame
+}
+
+/// True when a running step's monitors pass `frame` under `limits` as
+/// far as the frame alone decides ([`any_frame_the_monitors_pass`]).
+pub(crate) fn the_monitors_pass(frame: &PathSample, limits: &SafetyLimits) -> bool {
+    let (p, w) = (frame.pose, frame.wrench);
+    frame.time.is_finite()
+        && p.is_finite()
+        && w.is_finite()
+        && libm::fabs(w.fx) <= limits.max_force
+        && libm::fabs(w.fz) <= limits.max_force
+        && libm::fabs(w.ty) <= limits.max_torque
+        && p.z >= -limits.table_tolerance
+        && limits.workspace_x.contains(p.x)
+        && limits.workspace_z.contains(p.z)
 }
 
 /// Any request, targets included.

@@ -40,7 +40,7 @@ use crate::monitor::rates::RateWindow;
 use crate::monitor::set::MonitorSet;
 use crate::monitor::{Limit, Verdict, Violation};
 use crate::motion::SetPoint;
-use crate::path::{GraspPath, PathSample};
+use crate::path::{PathSample, PATH_CAPACITY};
 use crate::state::{
     EstimateStage, EstimateStep, Grasp, LimitUpdateRefusal, Refusal, RefusalReason, Request,
     SafeStop, State, StateKind, StopStart, Validated,
@@ -55,14 +55,20 @@ use crate::validate::ValidatedArm;
 /// # Invariants
 /// The configuration passed [`KernelConfig::check`]. `path` holds samples
 /// only from the current or last estimation motion.
+///
+/// `N` is the capacity of the path buffer [samples]. A product uses the
+/// default, [`PATH_CAPACITY`] (`Kernel` is `Kernel<PATH_CAPACITY>`); the
+/// Kani proofs of a lift's first step use a kernel of a few samples (a
+/// first step records at most one), the same code: at 4 096 samples the
+/// buffer alone kept CBMC from converting their formula in 10 min.
 #[derive(Clone, Debug)]
-pub struct Kernel {
+pub struct Kernel<const N: usize = PATH_CAPACITY> {
     config: KernelConfig,
     law: ImpedanceLaw,
     /// The monitors of `config.limits`.
     monitors: MonitorSet,
     state: State,
-    path: GraspPath,
+    path: heapless::Vec<PathSample, N>,
     rates: RateWindow,
     last_frame: Option<PathSample>,
     /// The newest frame the adapter gave, trusted or not: a step without
@@ -133,7 +139,9 @@ impl Kernel {
         config.check()?;
         Ok(slot.write(Self::fresh(config)))
     }
+}
 
+impl<const N: usize> Kernel<N> {
     /// A kernel in Grasp with the checked `config`. Always inlined, so that
     /// [`Kernel::new_in`] writes it straight into its slot.
     #[inline(always)]
@@ -145,7 +153,7 @@ impl Kernel {
             monitors: MonitorSet::from_limits(l),
             config,
             state: State::Grasp(Grasp::new()),
-            path: GraspPath::new(),
+            path: heapless::Vec::new(),
             last_frame: None,
             latest: None,
             latest_lateral: 0.0,
@@ -804,12 +812,13 @@ fn stop_state(state: &State, reason: StopReason, start: StopStart) -> SafeStop {
 }
 
 #[cfg(any(test, kani))]
-impl Kernel {
+impl<const N: usize> Kernel<N> {
     /// A kernel with the default configuration in `state`, as if a session
     /// had reached it: proofs start there without running one.
     pub(crate) fn in_state(state: State) -> Self {
-        let mut kernel =
-            Self::new(KernelConfig::default()).expect("the default configuration is valid");
+        let config = KernelConfig::default();
+        config.check().expect("the default configuration is valid");
+        let mut kernel = Self::fresh(config);
         kernel.state = state;
         kernel
     }
@@ -835,6 +844,7 @@ mod verification {
         validated_arm, HOLD,
     };
     use crate::kani_stubs::libm_stubbed;
+    use crate::lift::verification::{any_first_step_frame, first_lift, FIRST_STEP_AT};
     use crate::motion::EstimationMotion;
     use crate::state::Validated;
     #[cfg(not(kani))]
@@ -908,7 +918,7 @@ mod verification {
     /// 230 kB value), a Grasp step whose running part was stubbed by an
     /// operator's stop was undecided in 10 min (its solver's first round
     /// never ended); borrowed, decided in 94 s (real Kani, 2026-12-06).
-    fn one_step(kernel: &mut Kernel, at: Pose, now: f64) -> Command {
+    fn one_step<const N: usize>(kernel: &mut Kernel<N>, at: Pose, now: f64) -> Command {
         let before = kernel.state().kind();
         let frame = any_frame_or_at(at, now);
         let command = kernel.step(Some(&frame), now);
@@ -1033,7 +1043,11 @@ mod verification {
         /// Stub of [`Kernel::stop`] by [`stop_contract`]: the kernel in
         /// SafeStop for `reason` (latched from no pose: the state's pose is
         /// not the contract's), any command the contract allows.
-        pub(super) fn stop(kernel: &mut Kernel, reason: StopReason, now: f64) -> Command {
+        pub(super) fn stop<const N: usize>(
+            kernel: &mut Kernel<N>,
+            reason: StopReason,
+            now: f64,
+        ) -> Command {
             let at = if now.is_finite() { now } else { f64::NAN };
             let start = StopStart::at_pose(at, None);
             kernel.state = State::SafeStop(stop_state(&kernel.state, reason, start));
@@ -1054,6 +1068,90 @@ mod verification {
             kani::assume(stop_contract(reason, &command, after, &kernel.config.limits).is_ok());
             command
         }
+    }
+
+    /// The path buffer [samples] of the kernels whose proofs take a lift's
+    /// first step, which records at most one sample: with the product's
+    /// 4 096 ([`PATH_CAPACITY`]) CBMC's conversion of their formula did
+    /// not end in 10 min; with 64, 20 s (real Kani, 2026-12-07).
+    const FIRST_LIFT_STEP_PATH: usize = 4;
+
+    /// A kernel in Estimate at the start of [`first_lift`] (at kernel
+    /// time 0, nothing recorded), with a path buffer of
+    /// [`FIRST_LIFT_STEP_PATH`], and where the arm is: the lift's grasp.
+    fn lifting_kernel() -> (Kernel<FIRST_LIFT_STEP_PATH>, Pose) {
+        let lift = first_lift();
+        let grasp = lift.motion().lift().start();
+        let estimate = crate::state::verification::lifting(grasp, lift);
+        (Kernel::in_state(State::Estimate(estimate)), grasp)
+    }
+
+    #[cfg_attr(
+        kani,
+        kani::stub(
+            crate::estimation::online::OnlineEstimator::joint_envelope,
+            crate::estimation::online::stub::joint_envelope
+        )
+    )]
+    /// REQ-CMD-001, REQ-STOP-001: a stop during [`first_lift`]'s first
+    /// step, as the Estimate step's harness can call it at
+    /// [`FIRST_STEP_AT`]: from the lift as planned or as its first step
+    /// left it (the real step, on a frame the monitors passed: lifting on,
+    /// or settling after the force margin), with that frame trusted or
+    /// none, for any reason, meets [`stop_contract`].
+    #[cfg_attr(kani, kani::proof)]
+    #[cfg_attr(kani, kani::unwind(12))]
+    #[cfg_attr(kani, kani::stub(libm::hypot, crate::kani_stubs::stub::hypot))]
+    #[cfg_attr(kani, kani::stub(libm::sqrt, crate::kani_stubs::stub::sqrt))]
+    pub(super) fn verify_req_cmd_001_a_stop_during_a_lift_meets_its_contract() {
+        let config = KernelConfig::default();
+        let mut lift = first_lift();
+        let grasp = lift.motion().lift().start();
+        let frame = any_first_step_frame(&config.limits);
+        if kani::any() {
+            let online = crate::estimation::online::OnlineEstimator::new();
+            let settings = crate::lift::LiftSettings::of(&config);
+            let _ = lift.advance(FIRST_STEP_AT, &frame, &online, Some(None), &settings);
+        }
+        let settling = lift.ended().is_some();
+        let estimate = crate::state::verification::lifting(grasp, lift);
+        let mut kernel = Kernel::<FIRST_LIFT_STEP_PATH>::in_state(State::Estimate(estimate));
+        if kani::any() {
+            kernel.last_frame = Some(frame);
+        }
+        let reason = any_stop_reason();
+        let command = kernel.stop(reason, FIRST_STEP_AT);
+        let after = kernel.state().kind();
+        assert_eq!(
+            stop_contract(reason, &command, after, &kernel.config().limits),
+            Ok(())
+        );
+        kani::cover!(settling, "stop during a lift: settling");
+        kani::cover!(
+            command.set_point.is_some(),
+            "stop during a lift: holds a pose"
+        );
+    }
+
+    /// REQ-CMD-001, REQ-STOP-001: a stop at the start of [`first_lift`]
+    /// at any clock that is not finite, as the Estimate step's harness at
+    /// a bad clock calls it (the watchdog refuses the step: no frame is
+    /// trusted), for any reason, meets [`stop_contract`].
+    #[cfg_attr(kani, kani::proof)]
+    #[cfg_attr(kani, kani::unwind(12))]
+    pub(super) fn verify_req_cmd_001_a_stop_during_a_lift_at_a_bad_clock_meets_its_contract() {
+        let (mut kernel, _) = lifting_kernel();
+        let reason = any_stop_reason();
+        let command = kernel.stop(reason, any_bad_clock());
+        let after = kernel.state().kind();
+        assert_eq!(
+            stop_contract(reason, &command, after, &kernel.config().limits),
+            Ok(())
+        );
+        kani::cover!(
+            command.stop == Some(StopCategory::MotorsOff),
+            "stop during a lift at a bad clock: motors off"
+        );
     }
 
     /// Where Manipulate's move starts: held 0.1 m straight above
@@ -1101,8 +1199,7 @@ mod verification {
                 kani::assume(motion.is_ok());
                 kernel.state = State::Estimate(crate::state::verification::lifting(
                     REST,
-                    motion.expect("assumed"),
-                    0.0,
+                    crate::lift::ShapedLift::new(motion.expect("assumed"), 0.0),
                 ));
                 REST
             }
@@ -1187,26 +1284,36 @@ mod verification {
         };
     }
 
-    /// [`kernel_stubbed!`] for a lift's first step, with the estimation's
-    /// later parts stubbed by stubs that fail the proof when reached (an
-    /// assertion `false`): the online estimate's forearm and upper-arm
-    /// updates (a fresh estimate is Resting), the lift's conclusion and
-    /// the refinement with the validator (the lift settles on a later
-    /// step); and the provisional model's joint envelope by the answer a
-    /// fresh estimate gives, none (asserted: no provisional forearm).
-    /// Symbolic execution cannot fold the fresh estimate's phase, stage
-    /// and model out of the kernel's state (an enum, read through a union
-    /// of its variants), so without these it unrolled all of those bodies
-    /// and did not end in 10 min (12.8 GiB). With them it ends in about
-    /// 84 s, but the Estimate step harnesses are still undecided: the
-    /// formula's conversion does not end in 10 min, held up by the
-    /// kernel's 4 096-sample path buffer, which the step writes into (cut
-    /// to 64 samples in an experiment, not kept: 20 s; real Kani,
-    /// 2026-12-07). Past the conversion, the solver is held up by the
-    /// lift's duration, a formula under the libm stubs (the lift's goal
-    /// is planned through the sine and cosine of its angle): with a lift
-    /// planned straight up the lift's first step alone was decided in
-    /// 11-15 s (an experiment, not kept; README, Verification).
+    /// [`kernel_stubbed!`] for a lift's first step ([`lifting_kernel`]),
+    /// with the estimation's later parts stubbed by stubs that fail the
+    /// proof when reached (an assertion `false`): the online estimate's
+    /// forearm and upper-arm updates (a fresh estimate is Resting), the
+    /// lift's conclusion and the refinement with the validator (the lift
+    /// settles on a later step); the provisional model's joint envelope by
+    /// the answer a fresh estimate gives, none (asserted: no provisional
+    /// forearm); and two parts by the contracts their own harnesses prove:
+    /// the lift's step ([`first_step_contract`], by
+    /// `lift::verification::stub::advance`, which asserts it is called
+    /// where that contract was proved) and the stop ([`stop_contract`],
+    /// [`stub::stop`], proved from the lift as planned and as its first
+    /// step leaves it, and at a bad clock:
+    /// [`verify_req_cmd_001_a_stop_during_a_lift_meets_its_contract`],
+    /// [`verify_req_cmd_001_a_stop_during_a_lift_at_a_bad_clock_meets_its_contract`]).
+    ///
+    /// What each took out (real Kani, 2026-12-07): symbolic execution
+    /// cannot fold the fresh estimate's phase, stage and model out of the
+    /// kernel's state (an enum, read through a union of its variants), so
+    /// without the estimation's stubs it unrolled all of those bodies and
+    /// did not end in 10 min (12.8 GiB); with them, 84 s. The product's
+    /// 4 096-sample path buffer kept CBMC's conversion from ending in
+    /// 10 min (a buffer of [`FIRST_LIFT_STEP_PATH`]: 11-25 s). The default
+    /// lift's duration is a formula under the libm stubs (its goal is
+    /// planned through the sine and cosine of its angle), so [`first_lift`]
+    /// goes straight up; the lift's step on a symbolic frame and the stop's
+    /// pose built from that frame were each too much for the solver beside
+    /// the rest of the step, hence their contracts.
+    ///
+    /// [`first_step_contract`]: crate::lift::verification::first_step_contract
     macro_rules! first_lift_step_stubbed {
         ([$($f:ident),+] $(#[$attr:meta])* $vis:vis fn $name:ident() $body:block) => {
             kernel_stubbed! { [$($f),+]
@@ -1231,6 +1338,11 @@ mod verification {
                     crate::state::Conclusion::advance,
                     crate::state::verification::stub::conclusion_advance
                 ))]
+                #[cfg_attr(kani, kani::stub(
+                    crate::lift::ShapedLift::advance,
+                    crate::lift::verification::stub::advance
+                ))]
+                #[cfg_attr(kani, kani::stub(Kernel::stop, stub::stop))]
                 $vis fn $name() $body
             }
         };
@@ -1267,15 +1379,16 @@ mod verification {
 
     first_lift_step_stubbed! { [hypot, sqrt, atan2, sin, cos]
         /// REQ-PANIC-001, REQ-CMD-001, REQ-MON-006, REQ-MON-007, REQ-MON-012:
-        /// one step during the estimation (the first of a fresh lift: one sample
-        /// recorded into the online estimate, the lift shaped) with any frame
-        /// at the step's clock never panics, commands within the limits and
-        /// stops on any fault in the same step.
+        /// one step during the estimation (the first of [`first_lift`] at
+        /// [`FIRST_STEP_AT`]: one sample recorded into the path and the
+        /// online estimate, the lift shaped) with any frame never panics,
+        /// commands within the limits and stops on any fault in the same
+        /// step.
         #[cfg_attr(kani, kani::proof)]
         #[cfg_attr(kani, kani::unwind(12))]
         pub(super) fn verify_req_panic_001_step_during_estimation() {
-            let (mut kernel, at) = kernel_in(StateKind::Estimate);
-            let command = one_step(&mut kernel, at, 0.5);
+            let (mut kernel, at) = lifting_kernel();
+            let command = one_step(&mut kernel, at, FIRST_STEP_AT);
             kani::cover!(
                 command.state == StateKind::Estimate,
                 "estimate step: tracks"
@@ -1291,7 +1404,7 @@ mod verification {
         #[cfg_attr(kani, kani::proof)]
         #[cfg_attr(kani, kani::unwind(12))]
         pub(super) fn verify_req_panic_001_step_during_estimation_at_a_bad_clock() {
-            let (mut kernel, at) = kernel_in(StateKind::Estimate);
+            let (mut kernel, at) = lifting_kernel();
             let command = one_step(&mut kernel, at, any_bad_clock());
             kani::cover!(command.state == StateKind::SafeStop, "estimate step: stops");
         }
@@ -1848,6 +1961,16 @@ mod verification {
                 "a stop meets its contract",
                 2_000,
                 verify_req_cmd_001_a_stop_meets_its_contract,
+            );
+            kani::check(
+                "a stop during a lift meets its contract",
+                2_000,
+                verify_req_cmd_001_a_stop_during_a_lift_meets_its_contract,
+            );
+            kani::check(
+                "a stop during a lift at a bad clock meets its contract",
+                2_000,
+                verify_req_cmd_001_a_stop_during_a_lift_at_a_bad_clock_meets_its_contract,
             );
             kani::check(
                 "latch: a step",

@@ -487,10 +487,175 @@ fn end_reason(
 }
 
 #[cfg(any(test, kani))]
-mod verification {
+pub(crate) mod verification {
     use super::*;
+    use crate::estimation::EstimateError;
+    use crate::kani_inputs::any_frame_the_monitors_pass;
+    use crate::kani_stubs::libm_stubbed;
     #[cfg(not(kani))]
     use limb_kani_stand_in as kani;
+
+    /// When the proofs take a lift's first step [s after the lift started
+    /// at kernel time 0].
+    pub(crate) const FIRST_STEP_AT: f64 = 0.5;
+
+    /// The lift whose first step the proofs take, as planned at kernel
+    /// time 0: from the grasp at the origin of frame S straight up by the
+    /// default lift's length, the forearm turned by π/2, at the default
+    /// peak speed (0.3 m in 11.25 s), then the default hold. Along an axis
+    /// its length and duration are exact under the libm stubs (`hypot`
+    /// with a leg 0), so its set-points are numbers to symbolic execution.
+    /// The default lift's goal is planned through the sine and cosine of
+    /// its angle, any values under the stubs: with it the lift's duration
+    /// was a formula, and the Estimate step was undecided in 10 min (real
+    /// Kani, 2026-12-07).
+    pub(crate) fn first_lift() -> ShapedLift {
+        let p = KernelConfig::default().estimation_motion;
+        let grasp = Pose::new(0.0, 0.0, 0.0);
+        let goal = Pose::new(
+            grasp.x,
+            grasp.z + p.lift_length,
+            grasp.psi + core::f64::consts::FRAC_PI_2,
+        );
+        let lift = MinimumJerkMove::new(grasp, goal, p.peak_speed)
+            .expect("a finite move at a positive speed");
+        ShapedLift::new(EstimationMotion::of_lift(lift, p.hold_time), 0.0)
+    }
+
+    /// A frame at [`FIRST_STEP_AT`] for a step of [`first_lift`]: any
+    /// frame the monitors pass under `limits`, or (so that the sampling
+    /// stand-in reaches the lift's end too; one of those to Kani) the
+    /// grasp pulled by the force limit along both axes, which ends the
+    /// lift at its force margin.
+    pub(crate) fn any_first_step_frame(limits: &SafetyLimits) -> PathSample {
+        let grasp = first_lift().motion().lift().start();
+        if kani::any() {
+            any_frame_the_monitors_pass(grasp, FIRST_STEP_AT, limits)
+        } else {
+            PathSample {
+                time: FIRST_STEP_AT,
+                pose: grasp,
+                wrench: Wrench::new(limits.max_force, limits.max_force, 0.0),
+            }
+        }
+    }
+
+    /// REQ-PANIC-001, REQ-CMD-001: what [`first_lift`]'s step at
+    /// [`FIRST_STEP_AT`] on a frame the monitors passed may give: the
+    /// lift's set-point then; or, the step ending the lift (the force
+    /// margin), that set-point's pose held (where the settling move
+    /// starts); or a settling move that cannot be planned. Short of the
+    /// prior reach (0.25 mm of 0.25 m) and of the lift's end (0.5 s of
+    /// 11.25 s) the step can do nothing else. The contract the Estimate
+    /// step's proofs assume of the lift ([`stub::advance`]) and
+    /// [`verify_req_panic_001_a_first_lift_step_meets_its_contract`]
+    /// proves.
+    pub(crate) fn first_step_contract(
+        result: &Result<LiftCommand, EstimateError>,
+    ) -> Result<(), &'static str> {
+        let following = first_lift().segment.at(FIRST_STEP_AT);
+        match result {
+            Ok(LiftCommand::Move(s)) if *s == following || *s == SetPoint::hold(following.pose) => {
+                Ok(())
+            }
+            Ok(_) => Err("a lift's first step commanded another set-point"),
+            Err(EstimateError::NonFiniteSample) => Ok(()),
+            Err(_) => Err("a lift's first step failed for another reason than its own"),
+        }
+    }
+
+    libm_stubbed! { [hypot, sqrt, atan2, sin, cos]
+        #[cfg_attr(kani, kani::stub(
+            OnlineEstimator::record_forearm,
+            crate::estimation::online::stub::record_forearm
+        ))]
+        #[cfg_attr(kani, kani::stub(
+            OnlineEstimator::catch_up,
+            crate::estimation::online::stub::catch_up
+        ))]
+        #[cfg_attr(kani, kani::stub(
+            OnlineEstimator::joint_envelope,
+            crate::estimation::online::stub::joint_envelope
+        ))]
+        /// REQ-PANIC-001, REQ-CMD-001: [`first_lift`]'s step at
+        /// [`FIRST_STEP_AT`] with any frame the monitors pass, the online
+        /// estimate fresh or after one sample (any: a first step records
+        /// at most one; the lift then judges the joint envelope itself,
+        /// else it is handed the monitor's, none without a forearm), never
+        /// panics and meets [`first_step_contract`]. The online estimate's
+        /// phases and envelope are stubbed as in the Estimate step's
+        /// proofs (a fresh estimate has no forearm).
+        #[cfg_attr(kani, kani::proof)]
+        #[cfg_attr(kani, kani::unwind(12))]
+        pub(super) fn verify_req_panic_001_a_first_lift_step_meets_its_contract() {
+            let config = KernelConfig::default();
+            let mut lift = first_lift();
+            let frame = any_first_step_frame(&config.limits);
+            let mut online = OnlineEstimator::new();
+            let recorded: bool = kani::any();
+            if recorded {
+                online.record(&[kani::any()], &config.validation);
+            }
+            let judged = if recorded { None } else { Some(None) };
+            let result = lift.advance(
+                FIRST_STEP_AT,
+                &frame,
+                &online,
+                judged,
+                &LiftSettings::of(&config),
+            );
+            assert_eq!(first_step_contract(&result), Ok(()));
+            kani::cover!(
+                matches!(result, Ok(LiftCommand::Move(_))) && lift.ended().is_none(),
+                "lift's first step: lifts"
+            );
+            kani::cover!(lift.ended().is_some(), "lift's first step: ends the lift");
+        }
+    }
+
+    /// Kani stubs of the lift, each any answer its proved contract allows.
+    #[cfg(kani)]
+    pub(crate) mod stub {
+        use super::*;
+
+        /// Stub of [`ShapedLift::advance`] by [`first_step_contract`], for
+        /// the Estimate step's proofs (a lift's first step): asserts that
+        /// it is called where that contract was proved ([`first_lift`] as
+        /// planned, at [`FIRST_STEP_AT`], on a frame the monitors pass) and
+        /// gives any of the contract's answers, built from the planned
+        /// lift's set-point (numbers; the lift as read from the kernel's
+        /// state is not folded by symbolic execution). The lift is left as
+        /// it was: after its step a kernel step reads it only into its
+        /// trace, and a stop during the step is stubbed by its contract,
+        /// proved from the lift before and after a real first step
+        /// (`kernel::verification`).
+        pub(crate) fn advance(
+            lift: &mut ShapedLift,
+            now: f64,
+            frame: &PathSample,
+            _: &OnlineEstimator,
+            _: Option<Option<JointEnvelope>>,
+            settings: &LiftSettings<'_>,
+        ) -> Result<LiftCommand, EstimateError> {
+            let planned = first_lift();
+            kani::assert(
+                now == FIRST_STEP_AT && *lift == planned,
+                "the lift's stub stood for another step than its proof's",
+            );
+            kani::assert(
+                crate::kani_inputs::the_monitors_pass(frame, settings.limits),
+                "the lift's stub met a frame its proof does not cover",
+            );
+            let following = planned.segment.at(FIRST_STEP_AT);
+            let result = match kani::any::<u8>() {
+                0 => Ok(LiftCommand::Move(following)),
+                1 => Ok(LiftCommand::Move(SetPoint::hold(following.pose))),
+                _ => Err(EstimateError::NonFiniteSample),
+            };
+            kani::assume(first_step_contract(&result).is_ok());
+            result
+        }
+    }
 
     /// REQ-MON-014: what [`force_margin_end`] must answer for the filtered
     /// `force`, decided without a square root (the proof stubs `hypot`):
@@ -565,6 +730,11 @@ mod verification {
                 "lift force margin",
                 20_000,
                 verify_req_mon_014_resistance_ends_the_lift_at_its_margin,
+            );
+            kani::check(
+                "a lift's first step",
+                2_000,
+                verify_req_panic_001_a_first_lift_step_meets_its_contract,
             );
         }
 

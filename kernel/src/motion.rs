@@ -218,6 +218,14 @@ impl EstimationMotion {
         })
     }
 
+    /// The motion of a `lift` already planned, then a hold of
+    /// `hold_time` [s]: the proofs plan their own lift
+    /// (`lift::verification::straight_lift`).
+    #[cfg(any(test, kani))]
+    pub(crate) fn of_lift(lift: MinimumJerkMove, hold_time: f64) -> Self {
+        Self { lift, hold_time }
+    }
+
     /// The set-point `elapsed` seconds after the motion started.
     pub fn at(&self, elapsed: f64) -> SetPoint {
         self.lift.at(elapsed)

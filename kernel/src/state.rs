@@ -46,7 +46,7 @@ use crate::monitor::Violation;
 use crate::motion::{
     EstimationMotion, EstimationMotionParameters, MinimumJerkMove, PlanError, SetPoint,
 };
-use crate::path::{is_due, GraspPath, PathSample};
+use crate::path::{is_due, PathSample};
 use crate::stop::StopReason;
 use crate::stop::{StopCategory, StopMotion, HOLD_MIN_TIME, RAMP_DOWN_TIME};
 use crate::validate::{validate, ValidatedArm};
@@ -328,7 +328,7 @@ impl Grasp {
         parameters: &EstimationMotionParameters,
     ) -> Result<Estimate, (Self, PlanError)> {
         match EstimationMotion::new(grasp, parameters) {
-            Ok(motion) => Ok(Estimate::lifting(grasp, motion, now)),
+            Ok(motion) => Ok(Estimate::lifting(grasp, ShapedLift::new(motion, now))),
             Err(error) => Err((self, error)),
         }
     }
@@ -346,14 +346,14 @@ impl Default for Grasp {
 }
 
 impl Estimate {
-    /// A fresh estimation: the planned `motion` from `grasp` (frame S),
-    /// started at kernel time `now`, nothing recorded.
-    fn lifting(grasp: Pose, motion: EstimationMotion, now: f64) -> Self {
+    /// A fresh estimation from `grasp` (frame S) by `lift`, nothing
+    /// recorded.
+    fn lifting(grasp: Pose, lift: ShapedLift) -> Self {
         Estimate {
             grasp,
             online: OnlineEstimator::new(),
             tilt: PlaneTilt::new(),
-            stage: EstimateStage::Lifting(ShapedLift::new(motion, now)),
+            stage: EstimateStage::Lifting(lift),
         }
     }
 
@@ -396,9 +396,9 @@ impl Estimate {
     /// # Errors
     /// The path buffer is full, no forearm appeared in time, the
     /// estimation failed, or the validator rejected the estimate.
-    pub fn advance(
+    pub fn advance<const N: usize>(
         &mut self,
-        path: &mut GraspPath,
+        path: &mut heapless::Vec<PathSample, N>,
         frame: &PathSample,
         lateral: f64,
         now: f64,
@@ -497,7 +497,7 @@ impl Conclusion {
     /// The refinement failed or the validator rejected its estimate.
     fn advance(
         &mut self,
-        path: &GraspPath,
+        path: &[PathSample],
         grasp: Pose,
         limits: &ValidationLimits,
     ) -> Result<EstimateStep, StopReason> {
@@ -941,9 +941,10 @@ pub(crate) mod verification {
         assert_eq!(grasp.held().map(SetPoint::hold), stop.hold());
     }
 
-    /// A fresh estimation of the planned `motion` from `grasp` at `now`, as
-    /// [`Grasp::start_estimation`] makes it once the motion is planned,
-    /// for the proofs that start in Estimate: there the planning's result
+    /// A fresh estimation by `lift` from `grasp`, as
+    /// [`Grasp::start_estimation`] makes it once the motion is planned
+    /// (or, for the proofs of a stop during a lift, by the lift a first
+    /// step left), for the proofs that start in Estimate: there the planning's result
     /// under the libm stubs is symbolic (a duration is any number the
     /// hypot stub allows, finite or not to symbolic execution), and an
     /// estimate taken out of such a `Result` is merged with the error's
@@ -953,8 +954,8 @@ pub(crate) mod verification {
     /// kernel's state is still not folded by symbolic execution: the
     /// Estimate step's harnesses stub its later parts
     /// (`kernel::verification`'s `first_lift_step_stubbed!`).
-    pub(crate) fn lifting(grasp: Pose, motion: EstimationMotion, now: f64) -> Estimate {
-        Estimate::lifting(grasp, motion, now)
+    pub(crate) fn lifting(grasp: Pose, lift: ShapedLift) -> Estimate {
+        Estimate::lifting(grasp, lift)
     }
 
     /// Stubs of the estimation's conclusion, for the harnesses of a
@@ -970,7 +971,7 @@ pub(crate) mod verification {
         /// Stub of `Conclusion::advance`.
         pub(crate) fn conclusion_advance(
             _: &mut Conclusion,
-            _: &GraspPath,
+            _: &[PathSample],
             _: Pose,
             _: &ValidationLimits,
         ) -> Result<EstimateStep, StopReason> {
