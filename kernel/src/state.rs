@@ -958,12 +958,18 @@ pub(crate) mod verification {
         Estimate::lifting(grasp, lift)
     }
 
-    /// Stubs of the estimation's conclusion, for the harnesses of a
-    /// lift's first step (`kernel::verification`), where no conclusion
-    /// can be: the stage is Lifting and the lift has not settled (only a
-    /// later step's [`ShapedLift::settled`] ends it). Each fails the proof
-    /// if it is reached (Kani reports its assertion UNREACHABLE, i.e.
-    /// passed, only when no path of the harness gets there).
+    /// Stubs for the harnesses of a lift's first step
+    /// (`kernel::verification`): of the estimation's conclusion, where no
+    /// conclusion can be (the stage is Lifting and the lift has not
+    /// settled: only a later step's [`ShapedLift::settled`] ends it), and
+    /// of what other states would read. Each fails the proof if it is
+    /// reached where it must not be (Kani reports its assertion
+    /// UNREACHABLE, i.e. passed, only when no path of the harness gets
+    /// there). Symbolic execution cannot fold the kernel's state out of
+    /// its union of variants, so without them every state's branch of the
+    /// step was in the formula: the manipulation's set-point, the
+    /// stopped step and the validated model's kinematics took half of
+    /// its 20.9 M clauses (real Kani, 2026-12-07).
     #[cfg(kani)]
     pub(crate) mod stub {
         use super::*;
@@ -979,6 +985,24 @@ pub(crate) mod verification {
             Err(StopReason::EstimationFailed(
                 EstimateError::UpperArmPhaseTooShort,
             ))
+        }
+
+        /// Stub of [`Manipulate::set_point`]: a lift's first step has no
+        /// manipulation to read.
+        pub(crate) fn manipulate_set_point(manipulate: &Manipulate, _: f64) -> SetPoint {
+            kani::assert(false, "a lift's first step read a manipulation's set-point");
+            SetPoint::hold(manipulate.motion.goal())
+        }
+
+        /// Stub of [`State::arm`] for a lift's first step: asserts that
+        /// the state is Estimate and answers as the function then does,
+        /// no validated model.
+        pub(crate) fn arm(state: &State) -> Option<&ValidatedArm> {
+            kani::assert(
+                matches!(state, State::Estimate(_)),
+                "a lift's first step left Estimate before it read the model",
+            );
+            None
         }
 
         /// Stub of `Estimate::conclude`.
