@@ -220,7 +220,7 @@ impl EstimationMotion {
 
     /// The motion of a `lift` already planned, then a hold of
     /// `hold_time` [s]: the proofs plan their own lift
-    /// (`lift::verification::straight_lift`).
+    /// (`lift::verification::first_lift`).
     #[cfg(any(test, kani))]
     pub(crate) fn of_lift(lift: MinimumJerkMove, hold_time: f64) -> Self {
         Self { lift, hold_time }
