@@ -51,7 +51,7 @@ pub const FOREARMS: [f64; 2] = [0.16, 0.24];
 const PAIR_EVERY: usize = 4;
 /// Corrected arm error counted as right [m].
 pub const ARM_TOLERANCE: f64 = 0.003;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// How one parameter is drawn: (name, low, high, logarithmic, either sign).
 pub type Range = (&'static str, f64, f64, bool, bool);
@@ -141,7 +141,7 @@ fn confusion(singles: &[&Case]) -> Vec<Vec<usize>> {
 }
 
 /// One log of the check.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Case {
     /// Index in the run.
     pub index: usize,
