@@ -52,15 +52,29 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let records = simulate(l1, l2, case.seed, &effects)?;
         let diagnosed = diagnose(Lengths::Fitted, ArmBuild::Rod, &records, threads, &|_| {})?;
         let d = &diagnosed.diagnosis;
+        let truth: Vec<String> = case
+            .truth
+            .iter()
+            .zip(&case.params)
+            .map(|(name, params)| {
+                let values: Vec<String> = params
+                    .iter()
+                    .map(|(k, v)| format!("{k} = {v:.4}"))
+                    .collect();
+                format!("{name} ({})", values.join(", "))
+            })
+            .collect();
         println!(
-            "log {}: truth {:?} {:?}, arm ({l1:.4}, {l2:.4}) m, seed {}",
-            case.index, case.truth, case.params, case.seed
+            "log {}: truth {}, arm ({l1:.4}, {l2:.4}) m, seed {}",
+            case.index,
+            names(&truth),
+            case.seed
         );
         println!(
-            "  then: {:?}, arm off by {:.1} mm; now: {:?}, l1 {:+.1} mm, l2 {:+.1} mm, gap {:.2} → {:.2} σ ({:.0} s)",
-            case.added,
+            "  then: {}, arm off by {:.1} mm; now: {}, l1 {:+.1} mm, l2 {:+.1} mm, gap {:.2} → {:.2} σ ({:.0} s)",
+            names(&case.added),
             case.arm_error * 1e3,
-            d.effects.iter().map(|e| e.effect.as_str()).collect::<Vec<_>>(),
+            names(&d.effects.iter().map(|e| e.effect.clone()).collect::<Vec<_>>()),
             (d.arm.l1 - l1) * 1e3,
             (d.arm.l2 - l2) * 1e3,
             d.gap.before,
@@ -81,8 +95,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     )
                 })
                 .collect();
-            println!("  step {k}, added {:?}: {}", step.added, best.join("; "));
+            let added = step.added.as_deref().unwrap_or("nothing");
+            println!("  step {k}, added {added}: {}", best.join("; "));
         }
     }
     Ok(())
+}
+
+/// `items` comma-separated, `none` when there are none.
+fn names(items: &[String]) -> String {
+    if items.is_empty() {
+        "none".to_string()
+    } else {
+        items.join(", ")
+    }
 }
