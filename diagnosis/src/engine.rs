@@ -114,8 +114,12 @@ pub struct Options {
     /// effects of like size each remove less on their own, so an addition
     /// short of the share is kept on trial: it stays only when the next
     /// addition brings the two together to the share of the gap before
-    /// the trial (see [`select`]). 0 (the default): only the criterion
-    /// decides.
+    /// the trial, itself removing at least half the share of the gap it
+    /// joins (two effects of like size; without that, a second candidate
+    /// that trims a few per cent more carries the first over the share:
+    /// MyoArm's `stiff`, a `cuff_offset` on trial confirmed by a heavier
+    /// forearm it does not have). See [`select`]. 0 (the default): only
+    /// the criterion decides.
     pub min_share: f64,
 }
 
@@ -770,8 +774,15 @@ pub fn select(
         let best = ranked
             .first()
             .filter(|(r, _)| r.criterion > 0.0 && gap_now - r.held_out_after >= options.min_gain);
+        // An addition confirming a trial must be of like size: itself
+        // remove half the share of the gap it joins.
+        let alike =
+            |after: f64| trial.is_none() || gap_now - after >= options.min_share / 2.0 * gap_now;
         let winner = match best {
-            Some((r, _)) if share_of - r.held_out_after >= options.min_share * share_of => {
+            Some((r, _))
+                if share_of - r.held_out_after >= options.min_share * share_of
+                    && alike(r.held_out_after) =>
+            {
                 trial = None;
                 best
             }

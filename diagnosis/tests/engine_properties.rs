@@ -239,3 +239,40 @@ fn an_addition_on_trial_that_nothing_confirms_is_taken_back() {
     assert!(s.gap.before - tried.held_out_after >= 0.25, "{tried:?}");
     assert_eq!(s.gap.shrink, 0.0, "{:?}", s.gap);
 }
+
+#[test]
+fn a_trial_is_not_confirmed_by_an_addition_of_unlike_size() {
+    // Offset √12, gain 2 and 2√2 sin 13t (no candidate): a held-out gap
+    // of 4.56 (seed 5). The offset alone leaves 2.44 (a 46 % shrink: on
+    // trial), the gain after it 2.01 (the pair 56 %, past half) but
+    // itself only 18 % of the 2.44 it joins: short of a quarter, so it
+    // does not confirm the offset, and the answer holds no effect.
+    let planted = [(0, 12f64.sqrt()), (1, 2.0), (3, 2.0 * 2f64.sqrt())];
+    let toy = Toy::new(&planted, 5);
+    let s = selection(&toy, &half_the_gap());
+    assert!(s.effects.is_empty(), "{:?}", s.effects);
+    assert_eq!(s.gap.shrink, 0.0, "{:?}", s.gap);
+    // What the rule refused: with no share asked, the same two are
+    // added, the pair past half of the gap, the gain under a quarter of
+    // what the offset left.
+    let free = Options {
+        min_share: 0.0,
+        max_effects: 2,
+        ..half_the_gap()
+    };
+    let s = selection(&toy, &free);
+    let added: Vec<&str> = s.effects.iter().map(|e| e.effect.as_str()).collect();
+    assert_eq!(added, ["offset", "gain"]);
+    let (first, pair) = (s.effects[0].held_out_after, s.effects[1].held_out_after);
+    assert!(
+        first > 0.5 * s.gap.before,
+        "the offset alone: {first} of {}",
+        s.gap.before
+    );
+    assert!(
+        pair <= 0.5 * s.gap.before,
+        "the pair: {pair} of {}",
+        s.gap.before
+    );
+    assert!(first - pair < 0.25 * first, "the gain: {first} → {pair}");
+}
